@@ -1,0 +1,260 @@
+"""The numeric thesis bicycle: mass matrix, force terms, constraints, exact accelerations.
+
+Every function takes one state (``q`` of shape (8,)) or a batch (shape (N, 8)) and returns
+the matching shape; the work is done by the generated C (see ``codegen``), one C loop per
+batch. Sign conventions are the thesis's::
+
+    M ddq + D^T lambda = Qv + Qgrav + Qaero + S T,      D ddq + dD dq = 0
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import codegen
+from .derivation import BODY_NAMES, COORDINATES, TORQUE_NAMES
+from .params import Parameters, resolve_model
+
+INDEPENDENT = ("theta", "psi", "gamma")
+DEPENDENT = ("xc", "yc", "phi", "beta", "eps")
+IND = tuple(COORDINATES.index(n) for n in INDEPENDENT)
+DEP = tuple(COORDINATES.index(n) for n in DEPENDENT)
+CONSTRAINT_NAMES = ("rD_z", "vC_x", "vC_y", "vD_x", "vD_y")
+POINT_NAMES = codegen.POINT_NAMES
+N_Q, N_C = 8, 5
+
+_STATUS = {1: "the linear system is singular (constraint Jacobian rank-deficient or M not positive "
+              "definite): the state is at a kinematic singularity",
+           2: "the state or the result is not finite (NaN or inf in the input?)"}
+
+
+class ModelEvaluationError(ArithmeticError):
+    """A state where the model cannot be evaluated (singular system, non-finite numbers)."""
+
+
+_dp = ctypes.c_void_p
+_long = ctypes.c_long
+_dbl = ctypes.c_double
+
+
+@functools.lru_cache(maxsize=None)
+def _library(contact: str) -> codegen.Library:
+    lib = codegen.build(contact)
+    for name in lib.functions:
+        fn = getattr(lib.lib, f"bx_{name}_batch")
+        fn.argtypes = [_long, _dp, _dp, _dp, _dp]
+        fn.restype = None
+    f = lib.lib.bx_forward_batch
+    f.argtypes = [_long, _dp, _dp, _dp, _dp, _dbl, _dbl, _dp, _dp, _dp]
+    f.restype = _long
+    f = lib.lib.bx_inverse_dynamics_batch
+    f.argtypes = [_long, _dp, _dp, _dp, _dp, _dp, _dp]
+    f.restype = _long
+    return lib
+
+
+def _states(x, width: int, what: str) -> tuple[np.ndarray, bool]:
+    """x as a C-contiguous float64 (N, width) array, and whether it was a single state."""
+    a = np.ascontiguousarray(x, dtype=np.float64)
+    if a.ndim == 1 and a.shape[0] == width:
+        return a.reshape(1, width), True
+    if a.ndim == 2 and a.shape[1] == width:
+        return a, False
+    raise ValueError(f"{what} must have shape ({width},) or (N, {width}); got shape {a.shape}")
+
+
+@dataclass(frozen=True)
+class ForwardResult:
+    """Constrained accelerations, multipliers and per-state status (0 = ok)."""
+
+    ddq: np.ndarray
+    lam: np.ndarray
+    status: np.ndarray
+
+
+class Model:
+    """The thesis bicycle with one parameter set and one front-contact model.
+
+    Attributes: ``params`` (validated `Parameters`), ``contact`` ('thesis' or 'disc'),
+    ``name``, ``coordinates`` (the thesis order), ``independent`` / ``dependent``
+    coordinate names, ``library`` (the compiled code and its cache folder).
+    """
+
+    coordinates = COORDINATES
+    independent = INDEPENDENT
+    dependent = DEPENDENT
+    constraint_names = CONSTRAINT_NAMES
+    torque_names = TORQUE_NAMES
+    body_names = BODY_NAMES
+
+    def __init__(self, params: Parameters):
+        self.params = params
+        self.contact = params.contact
+        self.name = params.name
+        self.library = _library(params.contact)
+        self._p = np.ascontiguousarray(params.vector(), dtype=np.float64)
+        self._pp = self._p.ctypes.data
+        self._lib = self.library.lib
+
+    def __repr__(self) -> str:
+        return f"Model(name={self.name!r}, contact={self.contact!r}, source={self.params.source!r})"
+
+    def with_params(self, params: Parameters) -> "Model":
+        """The same model class with another parameter set (e.g. a perturbed copy)."""
+        return Model(params)
+
+    # -- generic evaluation ------------------------------------------------------------
+    def _eval(self, name: str, q, dq=None, shape=None):
+        fn = self.library.functions[name]
+        qa, single = _states(q, N_Q, "q")
+        if dq is None:
+            da = qa  # unused by the kernel
+        else:
+            da, single_d = _states(dq, N_Q, "dq")
+            if da.shape[0] != qa.shape[0]:
+                raise ValueError(f"q and dq must hold the same number of states; got {qa.shape[0]} "
+                                 f"and {da.shape[0]}")
+        n = qa.shape[0]
+        out = np.empty((n, fn.size))
+        getattr(self._lib, f"bx_{name}_batch")(n, qa.ctypes.data, da.ctypes.data, self._pp,
+                                               out.ctypes.data)
+        shape = shape or (fn.size,)
+        out = out.reshape((n, *shape))
+        return out[0] if single else out
+
+    # -- the thesis's matrices ---------------------------------------------------------
+    def mass_matrix(self, q) -> np.ndarray:
+        """M(q) = L^T MM L (8x8, symmetric positive definite)."""
+        return self._eval("mass_matrix", q, shape=(N_Q, N_Q))
+
+    def Qv(self, q, dq) -> np.ndarray:
+        """Quadratic-velocity forces L^T (QQv - MM l dq): gyroscopic and centripetal terms."""
+        return self._eval("qv", q, dq)
+
+    def Qgrav(self, q) -> np.ndarray:
+        """Generalised gravity forces sum_i H_i^T [0, 0, -m_i g]."""
+        return self._eval("qgrav", q)
+
+    def Qaero(self, q, dq) -> np.ndarray:
+        """Aerodynamic drag on the frame's CoM, -cv |vG3| H3^T vG3."""
+        return self._eval("qaero", q, dq)
+
+    def S(self, q) -> np.ndarray:
+        """Rider-torque map (8x3): columns steer torque on the fork about z4, pedal torque on
+        the rear wheel about y2, anti-roll torque on the frame about x3 (single-sided)."""
+        return self._eval("smat", q, shape=(N_Q, 3))
+
+    def generalized_forces(self, q, dq, torques=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Qv + Qgrav + Qaero + S T (8,), T = [Mdir, Mped, Mvue] (N m); batch: T (3,) or (N, 3)."""
+        dyn = self._eval("dynamics", q, dq)
+        T = np.asarray(torques, dtype=np.float64)
+        F = dyn[..., N_Q * N_Q:N_Q * N_Q + N_Q]
+        S = dyn[..., N_Q * N_Q + N_Q:].reshape(*dyn.shape[:-1], N_Q, 3)
+        if T.shape[-1:] != (3,) or T.ndim > 2:
+            raise ValueError(f"torques must have shape (3,) or (N, 3) [Mdir, Mped, Mvue]; got {T.shape}")
+        return F + np.einsum("...ij,...j->...i", S, T)
+
+    def constraint_residual(self, q, dq) -> np.ndarray:
+        """C = [rD_z, vC_x, vC_y, vD_x, vD_y] (front contact height, contact-point velocities)."""
+        return self._eval("constraint_residual", q, dq)
+
+    def constraint_jacobian(self, q) -> np.ndarray:
+        """D (5x8): d rD_z/dq on top of d(vC_x, vC_y, vD_x, vD_y)/d dq, so that D dq = 0."""
+        return self._eval("constraint_jacobian", q, shape=(N_C, N_Q))
+
+    def constraint_bias(self, q, dq) -> np.ndarray:
+        """dD dq (5,), so that D ddq + dD dq = 0."""
+        return self._eval("constraint_bias", q, dq)
+
+    def kinetic_energy(self, q, dq):
+        """Kinetic energy of the four bodies (J)."""
+        return self._eval("energy", q, dq)[..., 0]
+
+    def potential_energy(self, q):
+        """Gravitational potential energy sum m_i g z_Gi (J), zero at ground level."""
+        return self._eval("energy", q)[..., 1]
+
+    def points(self, q) -> dict[str, np.ndarray]:
+        """Global positions: rear contact rC, steering-axis point rA, CoMs rG2..rG5, front
+        contact rD (per the model's contact variant)."""
+        pts = self._eval("points", q, shape=(len(POINT_NAMES), 3))
+        return {k: pts[..., i, :] for i, k in enumerate(POINT_NAMES)}
+
+    # -- the thesis's linear systems ---------------------------------------------------
+    def forward(self, q, dq, torques=(0.0, 0.0, 0.0), baumgarte=(0.0, 0.0)) -> ForwardResult:
+        """Solve [M D'; D 0][ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C].
+
+        Never raises on a singular state: the status array says (0 ok, 1 singular, 2 non-finite).
+        ``baumgarte=(a1, a2)``; (0, 0) gives the exact constrained accelerations.
+        """
+        qa, single = _states(q, N_Q, "q")
+        da, _ = _states(dq, N_Q, "dq")
+        n = qa.shape[0]
+        if da.shape[0] != n:
+            raise ValueError(f"q and dq must hold the same number of states; got {n} and {da.shape[0]}")
+        T = np.ascontiguousarray(np.broadcast_to(np.asarray(torques, dtype=np.float64), (n, 3)))
+        ddq = np.empty((n, N_Q))
+        lam = np.empty((n, N_C))
+        status = np.empty(n, dtype=np.intc)
+        a1, a2 = baumgarte
+        self._lib.bx_forward_batch(n, qa.ctypes.data, da.ctypes.data, T.ctypes.data, self._pp,
+                                   float(a1), float(a2), ddq.ctypes.data, lam.ctypes.data,
+                                   status.ctypes.data)
+        if single:
+            return ForwardResult(ddq[0], lam[0], status[:1])
+        return ForwardResult(ddq, lam, status)
+
+    def forward_acceleration(self, q, dq, torques=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Exact constrained accelerations ddq (no Baumgarte); raises ModelEvaluationError at a
+        singular or non-finite state."""
+        res = self.forward(q, dq, torques)
+        _raise_on_status(res.status, "forward_acceleration")
+        return res.ddq
+
+    def inverse_dynamics_step(self, q, dq, ddq_ind):
+        """The thesis's 13x13 system at given states and independent accelerations.
+
+        ``ddq_ind`` = [ddtheta, ddpsi, ddgamma] (3,) or (N, 3). Returns (ddq, T, lam, status):
+        the full accelerations (8,), the rider torques [Mdir, Mped, Mvue] and the 5 multipliers.
+        """
+        qa, single = _states(q, N_Q, "q")
+        da, _ = _states(dq, N_Q, "dq")
+        ia, _ = _states(ddq_ind, 3, "ddq_ind")
+        n = qa.shape[0]
+        if da.shape[0] != n or ia.shape[0] != n:
+            raise ValueError("q, dq and ddq_ind must hold the same number of states")
+        out = np.empty((n, 13))
+        status = np.empty(n, dtype=np.intc)
+        self._lib.bx_inverse_dynamics_batch(n, qa.ctypes.data, da.ctypes.data, ia.ctypes.data,
+                                            self._pp, out.ctypes.data, status.ctypes.data)
+        ddq = np.empty((n, N_Q))
+        ddq[:, DEP] = out[:, :5]
+        ddq[:, IND] = ia
+        T, lam = out[:, 5:8], out[:, 8:13]
+        if single:
+            return ddq[0], T[0], lam[0], status[:1]
+        return ddq, T, lam, status
+
+
+def _raise_on_status(status: np.ndarray, what: str) -> None:
+    bad = np.flatnonzero(status)
+    if bad.size:
+        i = int(bad[0])
+        raise ModelEvaluationError(f"{what}: state {i} ({bad.size} state(s) in all): "
+                                   f"{_STATUS.get(int(status[i]), 'unknown failure')}")
+
+
+def load_model(name_or_path: str | Path = "thesis", *, contact: str | None = None) -> Model:
+    """Load a named model ('thesis', 'thesis-disc') or a parameter TOML file.
+
+    ``contact`` overrides the file's front-contact model ('thesis' or 'disc').
+    """
+    params = resolve_model(name_or_path)
+    if contact is not None:
+        params = params.with_contact(contact)
+    return Model(params)

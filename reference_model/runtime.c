@@ -1,0 +1,144 @@
+/* Hand-written runtime of the reference model: the thesis's linear systems.
+ *
+ * Included at the end of the generated file (bicycle_generated.c), so it can call the
+ * generated kernels bx_dynamics and bx_constraints directly and the compiler can inline them.
+ *
+ * Layouts (row-major):
+ *   bx_dynamics    out = [M (8x8) | F = Qv + Qgrav + Qaero (8) | S (8x3)]
+ *   bx_constraints out = [C (5) | D (5x8) | dD dq (5)]
+ * Forward dynamics (din_Bicicleta):  [M D'; D 0] [ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C]
+ *   (a1 = a2 = 0: exact constrained accelerations, no Baumgarte).
+ * Inverse dynamics (Dinamica_inversa): unknowns [ddq_dep (5); T (3); lambda (5)],
+ *   [M_dep  -S  D'; D_dep 0 0] x = [F - M_ind ddq_ind; -dD dq - D_ind ddq_ind]
+ *   with dep = (xc, yc, phi, beta, eps) and ind = (theta, psi, gamma).
+ * Return status: 0 ok, 1 singular system, 2 non-finite input or result.
+ */
+#define NQ 8
+#define NC 5
+#define NK (NQ + NC)
+#define DYN_SIZE (NQ * NQ + NQ + NQ * 3)
+#define CON_SIZE (NC + NC * NQ + NC)
+
+static const int DEP[NC] = {0, 1, 2, 5, 7};
+static const int IND[3] = {3, 4, 6};
+
+/* Gaussian elimination with partial pivoting, in place: A (n x n, row-major), b (n). */
+static int solve_dense(int n, double *A, double *b)
+{
+    double scale = 0.0;
+    for (int i = 0; i < n * n; ++i) {
+        double a = fabs(A[i]);
+        if (!isfinite(a)) return 2;
+        if (a > scale) scale = a;
+    }
+    if (scale == 0.0) return 1;
+    const double tiny = 1e-14 * scale;
+    for (int k = 0; k < n; ++k) {
+        int piv = k;
+        double best = fabs(A[k * n + k]);
+        for (int i = k + 1; i < n; ++i) {
+            double a = fabs(A[i * n + k]);
+            if (a > best) { best = a; piv = i; }
+        }
+        if (best <= tiny) return 1;
+        if (piv != k) {
+            for (int j = 0; j < n; ++j) {
+                double t = A[k * n + j]; A[k * n + j] = A[piv * n + j]; A[piv * n + j] = t;
+            }
+            double t = b[k]; b[k] = b[piv]; b[piv] = t;
+        }
+        const double inv = 1.0 / A[k * n + k];
+        for (int i = k + 1; i < n; ++i) {
+            const double f = A[i * n + k] * inv;
+            if (f == 0.0) continue;
+            for (int j = k + 1; j < n; ++j) A[i * n + j] -= f * A[k * n + j];
+            b[i] -= f * b[k];
+        }
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        double s = b[i];
+        for (int j = i + 1; j < n; ++j) s -= A[i * n + j] * b[j];
+        b[i] = s / A[i * n + i];
+        if (!isfinite(b[i])) return 2;
+    }
+    return 0;
+}
+
+int bx_forward(const double *q, const double *dq, const double *T, const double *p,
+               double a1, double a2, double *ddq, double *lam)
+{
+    double dyn[DYN_SIZE], con[CON_SIZE], A[NK * NK], b[NK];
+    bx_dynamics(q, dq, p, dyn);
+    bx_constraints(q, dq, p, con);
+    const double *M = dyn, *F = dyn + NQ * NQ, *S = dyn + NQ * NQ + NQ;
+    const double *C = con, *D = con + NC, *bias = con + NC + NC * NQ;
+    for (int i = 0; i < NK * NK; ++i) A[i] = 0.0;
+    for (int r = 0; r < NQ; ++r) {
+        for (int c = 0; c < NQ; ++c) A[r * NK + c] = M[r * NQ + c];
+        b[r] = F[r] + S[r * 3] * T[0] + S[r * 3 + 1] * T[1] + S[r * 3 + 2] * T[2];
+    }
+    for (int k = 0; k < NC; ++k) {
+        double Ddq = 0.0;
+        for (int c = 0; c < NQ; ++c) {
+            A[(NQ + k) * NK + c] = D[k * NQ + c];
+            A[c * NK + NQ + k] = D[k * NQ + c];
+            Ddq += D[k * NQ + c] * dq[c];
+        }
+        b[NQ + k] = -bias[k] - 2.0 * a1 * Ddq - a2 * a2 * C[k];
+    }
+    int status = solve_dense(NK, A, b);
+    for (int i = 0; i < NQ; ++i) ddq[i] = b[i];
+    for (int k = 0; k < NC; ++k) lam[k] = b[NQ + k];
+    return status;
+}
+
+long bx_forward_batch(long n, const double *q, const double *dq, const double *T, const double *p,
+                      double a1, double a2, double *ddq, double *lam, int *status)
+{
+    long failures = 0;
+    for (long i = 0; i < n; ++i) {
+        status[i] = bx_forward(q + NQ * i, dq + NQ * i, T + 3 * i, p, a1, a2, ddq + NQ * i, lam + NC * i);
+        failures += status[i] != 0;
+    }
+    return failures;
+}
+
+/* out = [ddq_dep (5) | T = (Mdir, Mped, Mvue) | lambda (5)] */
+int bx_inverse_dynamics(const double *q, const double *dq, const double *ddq_ind, const double *p,
+                        double *out)
+{
+    double dyn[DYN_SIZE], con[CON_SIZE], A[NK * NK], b[NK];
+    bx_dynamics(q, dq, p, dyn);
+    bx_constraints(q, dq, p, con);
+    const double *M = dyn, *F = dyn + NQ * NQ, *S = dyn + NQ * NQ + NQ;
+    const double *D = con + NC, *bias = con + NC + NC * NQ;
+    for (int i = 0; i < NK * NK; ++i) A[i] = 0.0;
+    for (int r = 0; r < NQ; ++r) {
+        for (int j = 0; j < NC; ++j) A[r * NK + j] = M[r * NQ + DEP[j]];
+        for (int j = 0; j < 3; ++j) A[r * NK + NC + j] = -S[r * 3 + j];
+        for (int k = 0; k < NC; ++k) A[r * NK + NC + 3 + k] = D[k * NQ + r];
+        double s = F[r];
+        for (int j = 0; j < 3; ++j) s -= M[r * NQ + IND[j]] * ddq_ind[j];
+        b[r] = s;
+    }
+    for (int k = 0; k < NC; ++k) {
+        for (int j = 0; j < NC; ++j) A[(NQ + k) * NK + j] = D[k * NQ + DEP[j]];
+        double s = -bias[k];
+        for (int j = 0; j < 3; ++j) s -= D[k * NQ + IND[j]] * ddq_ind[j];
+        b[NQ + k] = s;
+    }
+    int status = solve_dense(NK, A, b);
+    for (int i = 0; i < NK; ++i) out[i] = b[i];
+    return status;
+}
+
+long bx_inverse_dynamics_batch(long n, const double *q, const double *dq, const double *ddq_ind,
+                               const double *p, double *out, int *status)
+{
+    long failures = 0;
+    for (long i = 0; i < n; ++i) {
+        status[i] = bx_inverse_dynamics(q + NQ * i, dq + NQ * i, ddq_ind + 3 * i, p, out + NK * i);
+        failures += status[i] != 0;
+    }
+    return failures;
+}
