@@ -22,8 +22,15 @@ from .params import Parameters, resolve_model
 
 INDEPENDENT = ("theta", "psi", "gamma")
 DEPENDENT = ("xc", "yc", "phi", "beta", "eps")
-IND = tuple(COORDINATES.index(n) for n in INDEPENDENT)
-DEP = tuple(COORDINATES.index(n) for n in DEPENDENT)
+
+def _index(names) -> np.ndarray:
+    idx = np.array([COORDINATES.index(n) for n in names])
+    idx.flags.writeable = False
+    return idx
+
+
+IND = _index(INDEPENDENT)   # positions of theta, psi, gamma in q
+DEP = _index(DEPENDENT)     # positions of xc, yc, phi, beta, eps in q
 CONSTRAINT_NAMES = ("rD_z", "vC_x", "vC_y", "vD_x", "vD_y")
 POINT_NAMES = codegen.POINT_NAMES
 N_Q, N_C = 8, 5
