@@ -1,0 +1,30 @@
+# bicycle-xval: developer targets. The virtualenv lives in .venv; the stamp file
+# .venv/.installed is refreshed whenever pyproject.toml changes.
+
+PYTHON ?= python3
+VENV = .venv
+STAMP = $(VENV)/.installed
+
+.PHONY: venv test report bench clean
+
+venv: $(STAMP)
+
+$(VENV)/bin/python:
+	$(PYTHON) -m venv $(VENV)
+
+$(STAMP): pyproject.toml $(VENV)/bin/python
+	$(VENV)/bin/python -m pip install -e '.[test]'
+	touch $(STAMP)
+
+test: $(STAMP)
+	$(VENV)/bin/python -m pytest -q
+
+report: $(STAMP)
+	$(VENV)/bin/bicycle-xval run --out reports/latest
+
+bench: $(STAMP)
+	$(VENV)/bin/python benchmarks/run.py
+
+clean:  ## build leftovers and the generated-code cache (regenerated on next use)
+	rm -rf .cache build dist *.egg-info
+	rm -rf "$${BICYCLE_XVAL_CACHE:-$${XDG_CACHE_HOME:-$$HOME/.cache}/bicycle-xval}"

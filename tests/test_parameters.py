@@ -1,0 +1,467 @@
+"""Tests of reference_model.params: the thesis parameter file and the validation messages."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pickle
+import re
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from reference_model.params import (
+    CONTACT_MODELS,
+    NAMED_MODELS,
+    PARAMETER_GROUPS,
+    PARAMETER_NAMES,
+    PARAMETER_UNITS,
+    THESIS_FILE,
+    ParameterError,
+    Parameters,
+    load_parameters,
+    parameters_from_mapping,
+    resolve_model,
+)
+
+# The thesis numbers (din_Bicicleta), written independently of thesis.toml.
+THESIS_VALUES: dict[str, float] = {
+    "R_rear": 0.32,
+    "R_front": 0.32,
+    "x3": 0.23 + 0.03047,
+    "z3": 0.55 + 0.39687,
+    "xa": 0.85 + 0.05109,  # thesis x4
+    "za": 0.55 - 0.14221,  # thesis z4
+    "dx4": 0.0,
+    "dz4": 0.0,
+    "x5": 0.12 - 0.05109,
+    "z5": -0.55 + 0.14221,
+    "m2": 2.612,
+    "m3": 77.391,
+    "m4": 1.725,
+    "m5": 2.612,
+    "I2xx": 0.108,
+    "I2yy": 0.216,
+    "I2zz": 0.108,
+    "I3xx": 20.213,
+    "I3yy": 21.769,
+    "I3zz": 3.205,
+    "I3xz": -1.820,
+    "I4xx": 0.116,
+    "I4yy": 0.103,
+    "I4zz": 0.025,
+    "I4xz": 0.018,
+    "I5xx": 0.108,
+    "I5yy": 0.216,
+    "I5zz": 0.108,
+    "g": 9.81,
+    "cv": 0.8,
+}
+
+THESIS_TEXT = THESIS_FILE.read_text(encoding="utf-8")
+
+
+# ---------------------------------------------------------------------------- helpers
+
+
+def set_entry(text: str, key: str, rhs: str) -> str:
+    """Replace the right-hand side of the line ``key = ...`` (comment dropped)."""
+    pattern = re.compile(rf"^{re.escape(key)}\s*=.*$", re.MULTILINE)
+    assert len(pattern.findall(text)) == 1, key
+    return pattern.sub(lambda _: f"{key} = {rhs}", text)
+
+
+def rename_key(text: str, key: str, new: str) -> str:
+    pattern = re.compile(rf"^{re.escape(key)}(\s*=)", re.MULTILINE)
+    assert len(pattern.findall(text)) == 1, key
+    return pattern.sub(lambda m: new + m.group(1), text)
+
+
+def drop_key(text: str, key: str) -> str:
+    pattern = re.compile(rf"^{re.escape(key)}\s*=.*\n", re.MULTILINE)
+    assert len(pattern.findall(text)) == 1, key
+    return pattern.sub("", text)
+
+
+def write(tmp_path: Path, text: str, name: str = "bad.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def thesis_dict() -> dict[str, float]:
+    return dict(THESIS_VALUES)
+
+
+# ---------------------------------------------------------------------------- the thesis file
+
+
+def test_thesis_file_values_match_the_thesis() -> None:
+    p = load_parameters(THESIS_FILE)
+    for name, expected in THESIS_VALUES.items():
+        assert getattr(p, name) == pytest.approx(expected, rel=0, abs=1e-12), name
+    assert p.name == "thesis"
+    assert p.contact == "thesis"
+    assert p.source == str(THESIS_FILE)
+
+
+def test_thesis_file_has_exactly_the_parameter_names_in_their_tables() -> None:
+    data = tomllib.loads(THESIS_TEXT)
+    assert set(data) == {"model", "geometry", "mass", "inertia", "environment"}
+    found = {key: table for table in data if table != "model" for key in data[table]}
+    assert set(found) == set(PARAMETER_NAMES)
+    assert found == PARAMETER_GROUPS
+    # written in the contract order, with the canonical unit
+    order = [key for table in data if table != "model" for key in data[table]]
+    assert order == list(PARAMETER_NAMES)
+    for name, table in PARAMETER_GROUPS.items():
+        assert data[table][name]["unit"] == PARAMETER_UNITS[name]
+
+
+def test_thesis_model_table() -> None:
+    model = tomllib.loads(THESIS_TEXT)["model"]
+    assert model["name"] == "thesis"
+    assert model["contact"] == "thesis"
+    assert "mínimo número de coordenadas" in model["source"]
+
+
+def test_parameter_names_contract() -> None:
+    assert len(PARAMETER_NAMES) == 30 == len(set(PARAMETER_NAMES))
+    assert PARAMETER_NAMES[:2] == ("R_rear", "R_front")
+    assert PARAMETER_NAMES[-2:] == ("g", "cv")
+    fields = [f.name for f in dataclasses.fields(Parameters)]
+    assert fields == [*PARAMETER_NAMES, "name", "contact", "source"]
+    assert list(PARAMETER_UNITS) == list(PARAMETER_NAMES)
+    assert list(PARAMETER_GROUPS) == list(PARAMETER_NAMES)
+    assert CONTACT_MODELS == ("thesis", "disc")
+
+
+def test_vector_order_and_dtype() -> None:
+    p = load_parameters(THESIS_FILE)
+    v = p.vector()
+    assert v.dtype == np.float64 and v.shape == (30,)
+    for i, name in enumerate(PARAMETER_NAMES):
+        assert v[i] == getattr(p, name)
+    assert Parameters.from_vector(v, name=p.name, source=p.source) == p
+
+
+def test_inertia_tensors() -> None:
+    p = load_parameters(THESIS_FILE)
+    i3 = p.inertia(3)
+    assert i3.shape == (3, 3)
+    np.testing.assert_array_equal(i3, i3.T)
+    assert i3[0, 2] == i3[2, 0] == pytest.approx(-1.820)
+    assert np.diag(i3) == pytest.approx([20.213, 21.769, 3.205])
+    assert p.inertia(4)[0, 2] == pytest.approx(0.018)
+    np.testing.assert_array_equal(p.inertia(2), np.diag([0.108, 0.216, 0.108]))
+    np.testing.assert_array_equal(p.inertia(5), p.inertia(2))
+    for body in (2, 3, 4, 5):
+        assert np.all(np.linalg.eigvalsh(p.inertia(body)) > 0)
+    for bad in (1, 6, True):
+        with pytest.raises(ValueError, match="body"):
+            p.inertia(bad)
+
+
+def test_as_dict_round_trip_and_immutability() -> None:
+    p = load_parameters(THESIS_FILE)
+    d = p.as_dict()
+    assert list(d)[:30] == list(PARAMETER_NAMES)
+    assert Parameters(**d) == p
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        p.m2 = 3.0  # type: ignore[misc]
+
+
+def test_named_models() -> None:
+    assert set(NAMED_MODELS) == {"thesis", "thesis-disc"}
+    a = resolve_model("thesis")
+    b = resolve_model("thesis-disc")
+    assert (a.name, a.contact) == ("thesis", "thesis")
+    assert (b.name, b.contact) == ("thesis-disc", "disc")
+    np.testing.assert_array_equal(a.vector(), b.vector())
+    assert resolve_model(str(THESIS_FILE)) == a
+    assert resolve_model(THESIS_FILE) == a
+    assert resolve_model(a) is a
+
+
+def test_contact_and_name_overrides() -> None:
+    p = load_parameters(THESIS_FILE, contact="disc", name="x")
+    assert (p.contact, p.name) == ("disc", "x")
+    assert p.with_contact("thesis").contact == "thesis"
+
+
+def test_model_table_is_optional(tmp_path: Path) -> None:
+    text = THESIS_TEXT.split("[geometry]", 1)[1]
+    p = load_parameters(write(tmp_path, "[geometry]" + text, "mybike.toml"))
+    assert (p.name, p.contact) == ("mybike", "thesis")
+
+
+def test_plain_numbers_mean_canonical_units(tmp_path: Path) -> None:
+    text = set_entry(THESIS_TEXT, "m2", "2.612")
+    text = set_entry(text, "x3", "0.26047")
+    text = set_entry(text, "dx4", "0")  # an integer is a number too
+    p = load_parameters(write(tmp_path, text))
+    ref = load_parameters(THESIS_FILE)
+    assert p.vector() == pytest.approx(ref.vector(), rel=1e-15, abs=0)
+
+
+def test_unit_conversions(tmp_path: Path) -> None:
+    text = set_entry(THESIS_TEXT, "x3", '{ value = 26.047, unit = "cm" }')
+    text = set_entry(text, "z3", '{ value = 946.87, unit = "mm" }')
+    text = set_entry(text, "m2", '{ value = 2612, unit = "g" }')
+    text = set_entry(text, "I3xx", '{ value = 20.213, unit = "kg m^2" }')
+    text = set_entry(text, "I3yy", '{ value = 21.769, unit = "kg·m²" }')
+    text = set_entry(text, "I2yy", '{ value = 2160000, unit = "g*cm^2" }')
+    p = load_parameters(write(tmp_path, text))
+    ref = load_parameters(THESIS_FILE)
+    assert p.vector() == pytest.approx(ref.vector(), rel=1e-12, abs=0)
+
+
+def test_replace_validates_and_copies() -> None:
+    p = resolve_model("thesis")
+    q = p.replace(m3=80.0, cv=0.0)
+    assert (q.m3, q.cv, p.m3) == (80.0, 0.0, 77.391)
+    with pytest.raises(ParameterError, match=r"mass\.m3.*> 0"):
+        p.replace(m3=-1.0)
+    with pytest.raises(ParameterError, match=r"'m33'.*'m3'"):
+        p.replace(m33=1.0)
+    with pytest.raises(ParameterError, match=r"model\.contact.*'sphere'"):
+        p.with_contact("sphere")
+
+
+def test_parameters_built_in_code_are_validated() -> None:
+    values = thesis_dict()
+    assert Parameters(**values).source == "<memory>"
+    values["I4xz"] = float("nan")
+    with pytest.raises(ParameterError, match=r"<memory>: inertia\.I4xz: .*finite"):
+        Parameters(**values)
+
+
+def test_parameters_from_mapping() -> None:
+    data = {table: {} for table in ("geometry", "mass", "inertia", "environment")}
+    for name, value in THESIS_VALUES.items():
+        data[PARAMETER_GROUPS[name]][name] = value
+    p = parameters_from_mapping(data)
+    assert p.vector() == pytest.approx(resolve_model("thesis").vector(), abs=1e-12)
+
+
+def test_parameter_error_is_picklable_value_error() -> None:
+    err = ParameterError("f.toml", "mass.m2", "bad", "fix it")
+    assert isinstance(err, ValueError)
+    back = pickle.loads(pickle.dumps(err))
+    assert str(back) == str(err) == "f.toml: mass.m2: bad; fix: fix it"
+    assert (back.file, back.key, back.problem, back.fix) == ("f.toml", "mass.m2", "bad", "fix it")
+
+
+def test_missing_file() -> None:
+    with pytest.raises(ParameterError, match=r"nope\.toml: \(file\): no such file"):
+        load_parameters("nope.toml")
+    with pytest.raises(ParameterError, match="no such file"):
+        resolve_model("nope.toml")
+
+
+# ---------------------------------------------------------------------------- bad inputs
+
+
+def _unknown_key(t: str) -> str:
+    return rename_key(t, "R_rear", "R_reer")
+
+
+def _misplaced_key(t: str) -> str:
+    return drop_key(t, "m2").replace("[geometry]\n", "[geometry]\nm2 = 2.612\n")
+
+
+def _unknown_table(t: str) -> str:
+    return t.replace("[environment]", "[enviroment]")
+
+
+def _triangle(t: str) -> str:
+    t = set_entry(t, "I2xx", '{ value = 1.0, unit = "kg*m^2" }')
+    t = set_entry(t, "I2yy", '{ value = 1.0, unit = "kg*m^2" }')
+    return set_entry(t, "I2zz", '{ value = 3.0, unit = "kg*m^2" }')
+
+
+def _triangle_with_product(t: str) -> str:
+    # principal moments of the x-z block: 20.213 + 3.205 +- ..., yy far too large
+    return set_entry(t, "I3yy", '{ value = 30.0, unit = "kg*m^2" }')
+
+
+BAD_CASES = [
+    pytest.param(_unknown_key, ["geometry.R_reer", "unknown key", "'R_rear'"], id="unknown-key"),
+    pytest.param(_misplaced_key, ["geometry.m2", "belongs in [mass]"], id="misplaced-key"),
+    pytest.param(_unknown_table, ["enviroment", "unknown table", "[environment]"], id="unknown-table"),
+    pytest.param(
+        lambda t: drop_key(t, "cv"), ["environment.cv", "missing", 'unit = "kg/m"'], id="missing-key"
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "x3", '{ value = nan, unit = "m" }'),
+        ["geometry.x3", "nan", "not a finite real number"],
+        id="nan",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "g", '{ value = inf, unit = "m/s^2" }'),
+        ["environment.g", "inf", "not a finite real number"],
+        id="inf",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "z5", "-inf"),
+        ["geometry.z5", "-inf", "not a finite real number"],
+        id="plain-minus-inf",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "m3", '{ value = "77.391", unit = "kg" }'),
+        ["mass.m3", "string, not a number", "remove the quotes"],
+        id="string",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "za", '{ value = true, unit = "m" }'),
+        ["geometry.za", "boolean, not a number"],
+        id="bool",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "m4", '{ value = -1.725, unit = "kg" }'),
+        ["mass.m4", "-1.725", "must be > 0"],
+        id="negative-mass",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "R_front", '{ value = 0.0, unit = "m" }'),
+        ["geometry.R_front", "must be > 0"],
+        id="zero-radius",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "cv", '{ value = -0.1, unit = "kg/m" }'),
+        ["environment.cv", "must be >= 0"],
+        id="negative-drag",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "x5", '{ value = 0.06891, unit = "in" }'),
+        ["geometry.x5", "unit 'in'", "length", "'m'", "'cm'", "'mm'"],
+        id="wrong-unit",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "m2", '{ value = 2.612, unit = "m" }'),
+        ["mass.m2", "unit 'm'", "mass unit", "'kg'", "'g'"],
+        id="unit-of-other-dimension",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "x5", "{ value = 0.06891 }"),
+        ["geometry.x5", "unit missing", 'unit = "m"'],
+        id="missing-unit",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "x5", '{ valeu = 0.06891, unit = "m" }'),
+        ["geometry.x5", "unknown field 'valeu'", "'value'"],
+        id="misspelt-value",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "I3xz", '{ value = -9.0, unit = "kg*m^2" }'),
+        ["inertia of body 3 (frame+rider)", "not positive definite", "inertia.I3xz"],
+        id="non-pd-product",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "I4yy", '{ value = -0.103, unit = "kg*m^2" }'),
+        ["inertia of body 4 (fork/handlebar)", "not positive definite", "inertia.I4yy"],
+        id="non-pd-diagonal",
+    ),
+    pytest.param(
+        _triangle,
+        ["inertia of body 2 (rear wheel)", "triangle inequality", "inertia.I2zz"],
+        id="triangle",
+    ),
+    pytest.param(
+        _triangle_with_product,
+        ["inertia of body 3 (frame+rider)", "triangle inequality", "inertia.I3yy"],
+        id="triangle-with-product",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "contact", '"sphere"'),
+        ["model.contact", "'sphere'", "'thesis'", "'disc'"],
+        id="unknown-contact",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "description", "42"),
+        ["model.description", "not a string"],
+        id="non-string-description",
+    ),
+    pytest.param(
+        lambda t: set_entry(t, "x3", '{ value = 0.26047, unit = "m" '),
+        ["line ", "invalid TOML", "Unclosed inline table", "x3 = "],
+        id="toml-syntax",
+    ),
+]
+
+
+@pytest.mark.parametrize(("mutate", "expected"), BAD_CASES)
+def test_bad_file_gives_one_clear_error(tmp_path: Path, mutate, expected: list[str]) -> None:
+    path = write(tmp_path, mutate(THESIS_TEXT))
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ")
+    assert "\n" not in message
+    assert "; fix: " in message
+    for part in expected:
+        assert part in message, (part, message)
+
+
+def test_toml_syntax_line_number_is_right(tmp_path: Path) -> None:
+    lineno = THESIS_TEXT.splitlines().index(
+        next(line for line in THESIS_TEXT.splitlines() if line.startswith("x3 ="))
+    ) + 1
+    text = set_entry(THESIS_TEXT, "x3", '{ value = 0.26047, unit = "m" ')
+    with pytest.raises(ParameterError, match=rf": line {lineno}: invalid TOML"):
+        load_parameters(write(tmp_path, text))
+
+
+def test_unknown_contact_argument() -> None:
+    with pytest.raises(ParameterError, match=r"model\.contact.*'wheel'"):
+        load_parameters(THESIS_FILE, contact="wheel")
+
+
+def test_unknown_named_model() -> None:
+    with pytest.raises(ParameterError) as info:
+        resolve_model("thesis-dsc")
+    message = str(info.value)
+    for part in ("thesis-dsc", "unknown model", "'thesis-disc'", "thesis, thesis-disc", ".toml"):
+        assert part in message, (part, message)
+
+
+# ---------------------------------------------------------------------------- properties
+
+moment = st.floats(min_value=1e-3, max_value=1e3, allow_nan=False, allow_infinity=False)
+
+
+@given(a=moment, b=moment, c=moment)
+def test_wheel_inertia_valid_iff_triangle_holds(a: float, b: float, c: float) -> None:
+    values = thesis_dict() | {"I5xx": a, "I5yy": b, "I5zz": c}
+    top = max(a, b, c)
+    if (a + b + c) - top >= top * (1 - 1e-9):
+        Parameters(**values)
+    elif (a + b + c) - top < top * (1 - 1e-11):
+        with pytest.raises(ParameterError, match=r"body 5 \(front wheel\).*triangle"):
+            Parameters(**values)
+
+
+@given(
+    xx=moment,
+    zz=moment,
+    angle=st.floats(min_value=-math.pi, max_value=math.pi),
+    yy_scale=st.floats(min_value=0.01, max_value=3.0),
+)
+def test_frame_inertia_agrees_with_eigenvalues(xx: float, zz: float, angle: float, yy_scale: float) -> None:
+    # a physically meaningful x-z block rotated about y, and a yy that may or may not fit
+    c, s = math.cos(angle), math.sin(angle)
+    block = np.array([[c, -s], [s, c]]) @ np.diag([xx, zz]) @ np.array([[c, s], [-s, c]])
+    yy = yy_scale * (xx + zz)
+    values = thesis_dict() | {"I3xx": block[0, 0], "I3zz": block[1, 1], "I3xz": block[0, 1], "I3yy": yy}
+    principal = sorted([xx, zz, yy])
+    margin = principal[0] + principal[1] - principal[2]
+    if margin > 1e-9 * principal[2]:
+        p = Parameters(**values)
+        assert np.linalg.eigvalsh(p.inertia(3)) == pytest.approx(principal, rel=1e-9)
+    elif margin < -1e-9 * principal[2]:
+        with pytest.raises(ParameterError, match=r"body 3 \(frame\+rider\).*triangle"):
+            Parameters(**values)
