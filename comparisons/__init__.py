@@ -1,0 +1,1 @@
+"""Scenarios, metrics, the runner, the report writer and the `bicycle-xval` command line."""
