@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -107,6 +108,17 @@ class Model:
         self._p = np.ascontiguousarray(params.vector(), dtype=np.float64)
         self._pp = self._p.ctypes.data
         self._lib = self.library.lib
+        # Single-state fast path: inputs are copied into fixed scratch buffers whose addresses
+        # are taken once (numpy's .ctypes.data costs ~1 us per call, more than the C work).
+        self._lock = threading.Lock()
+        self._in = np.zeros(3 * N_Q + 6)                   # q | dq | T (3) | ddq_ind (3)
+        self._out = np.zeros(128)
+        self._status = np.zeros(1, dtype=np.intc)
+        base = self._in.ctypes.data
+        self._pq, self._pdq = base, base + 8 * N_Q
+        self._pT, self._pind = base + 16 * N_Q, base + 8 * (2 * N_Q + 3)
+        self._pout, self._pst = self._out.ctypes.data, self._status.ctypes.data
+        self._kernels = {name: getattr(self._lib, f"bx_{name}_batch") for name in self.library.functions}
 
     def __repr__(self) -> str:
         return f"Model(name={self.name!r}, contact={self.contact!r}, source={self.params.source!r})"
@@ -118,6 +130,14 @@ class Model:
     # -- generic evaluation ------------------------------------------------------------
     def _eval(self, name: str, q, dq=None, shape=None):
         fn = self.library.functions[name]
+        shape = shape or (fn.size,)
+        if np.ndim(q) == 1 and np.shape(q)[0] == N_Q and (dq is None or np.shape(dq) == (N_Q,)):
+            with self._lock:
+                self._in[:N_Q] = q
+                if dq is not None:
+                    self._in[N_Q:2 * N_Q] = dq
+                self._kernels[name](1, self._pq, self._pdq, self._pp, self._pout)
+                return self._out[:fn.size].reshape(shape).copy()
         qa, single = _states(q, N_Q, "q")
         if dq is None:
             da = qa  # unused by the kernel
@@ -130,7 +150,6 @@ class Model:
         out = np.empty((n, fn.size))
         getattr(self._lib, f"bx_{name}_batch")(n, qa.ctypes.data, da.ctypes.data, self._pp,
                                                out.ctypes.data)
-        shape = shape or (fn.size,)
         out = out.reshape((n, *shape))
         return out[0] if single else out
 
@@ -199,6 +218,17 @@ class Model:
         Never raises on a singular state: the status array says (0 ok, 1 singular, 2 non-finite).
         ``baumgarte=(a1, a2)``; (0, 0) gives the exact constrained accelerations.
         """
+        if np.shape(q) == (N_Q,) and np.shape(dq) == (N_Q,) and np.shape(torques) == (3,):
+            a1, a2 = baumgarte
+            with self._lock:
+                buf = self._in
+                buf[:N_Q] = q
+                buf[N_Q:2 * N_Q] = dq
+                buf[2 * N_Q:2 * N_Q + 3] = torques
+                self._lib.bx_forward_batch(1, self._pq, self._pdq, self._pT, self._pp, float(a1),
+                                           float(a2), self._pout, self._pout + 8 * N_Q, self._pst)
+                out = self._out
+                return ForwardResult(out[:N_Q].copy(), out[N_Q:N_Q + N_C].copy(), self._status.copy())
         qa, single = _states(q, N_Q, "q")
         da, _ = _states(dq, N_Q, "dq")
         n = qa.shape[0]
@@ -220,7 +250,8 @@ class Model:
         """Exact constrained accelerations ddq (no Baumgarte); raises ModelEvaluationError at a
         singular or non-finite state."""
         res = self.forward(q, dq, torques)
-        _raise_on_status(res.status, "forward_acceleration")
+        if res.status.any():
+            _raise_on_status(res.status, "forward_acceleration")
         return res.ddq
 
     def inverse_dynamics_step(self, q, dq, ddq_ind):

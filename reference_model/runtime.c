@@ -6,7 +6,8 @@
  * Layouts (row-major):
  *   bx_dynamics    out = [M (8x8) | F = Qv + Qgrav + Qaero (8) | S (8x3)]
  *   bx_constraints out = [C (5) | D (5x8) | dD dq (5)]
- * Forward dynamics (din_Bicicleta):  [M D'; D 0] [ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C]
+ * Forward dynamics (din_Bicicleta):  [M D'; D 0] [ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C],
+ *   solved in range space (Cholesky of M, then of D M^-1 D').
  *   (a1 = a2 = 0: exact constrained accelerations, no Baumgarte).
  * Inverse dynamics (Dinamica_inversa): unknowns [ddq_dep (5); T (3); lambda (5)],
  *   [M_dep  -S  D'; D_dep 0 0] x = [F - M_ind ddq_ind; -dD dq - D_ind ddq_ind]
@@ -64,31 +65,92 @@ static int solve_dense(int n, double *A, double *b)
     return 0;
 }
 
+/* In-place Cholesky M = L L^T of an n x n SPD matrix (lower triangle); 1 if not positive definite. */
+static int cholesky(int n, double *A)
+{
+    double scale = 0.0;
+    for (int i = 0; i < n; ++i) if (A[i * n + i] > scale) scale = A[i * n + i];
+    if (!(scale > 0.0) || !isfinite(scale)) return isfinite(scale) ? 1 : 2;
+    for (int j = 0; j < n; ++j) {
+        double d = A[j * n + j];
+        for (int k = 0; k < j; ++k) d -= A[j * n + k] * A[j * n + k];
+        if (!(d > 1e-14 * scale)) return isfinite(d) ? 1 : 2;
+        d = sqrt(d);
+        A[j * n + j] = d;
+        const double inv = 1.0 / d;
+        for (int i = j + 1; i < n; ++i) {
+            double s = A[i * n + j];
+            for (int k = 0; k < j; ++k) s -= A[i * n + k] * A[j * n + k];
+            A[i * n + j] = s * inv;
+        }
+    }
+    return 0;
+}
+
+/* Solve L L^T x = b in place for m right-hand sides stored as rows of B (m x n). */
+static void cholesky_solve(int n, const double *L, int m, double *B)
+{
+    for (int r = 0; r < m; ++r) {
+        double *x = B + r * n;
+        for (int i = 0; i < n; ++i) {
+            double s = x[i];
+            for (int k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
+            x[i] = s / L[i * n + i];
+        }
+        for (int i = n - 1; i >= 0; --i) {
+            double s = x[i];
+            for (int k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
+            x[i] = s / L[i * n + i];
+        }
+    }
+}
+
+/* Range-space solution of the KKT system (M symmetric positive definite):
+ *   a0 = M^-1 (F + S T),  X = M^-1 D^T,  (D X) lambda = D a0 - b,  ddq = a0 - X lambda,
+ * with b = -dD dq - 2 a1 D dq - a2^2 C. Same solution as [M D'; D 0] \ [F + S T; b], about
+ * four times cheaper than a 13x13 LU, and M's positive definiteness is checked on the way. */
 int bx_forward(const double *q, const double *dq, const double *T, const double *p,
                double a1, double a2, double *ddq, double *lam)
 {
-    double dyn[DYN_SIZE], con[CON_SIZE], A[NK * NK], b[NK];
+    double dyn[DYN_SIZE], con[CON_SIZE], B[(NC + 1) * NQ], DX[NC * NC], r[NC];
     bx_dynamics(q, dq, p, dyn);
     bx_constraints(q, dq, p, con);
-    const double *M = dyn, *F = dyn + NQ * NQ, *S = dyn + NQ * NQ + NQ;
+    double *M = dyn;
+    const double *F = dyn + NQ * NQ, *S = dyn + NQ * NQ + NQ;
     const double *C = con, *D = con + NC, *bias = con + NC + NC * NQ;
-    for (int i = 0; i < NK * NK; ++i) A[i] = 0.0;
-    for (int r = 0; r < NQ; ++r) {
-        for (int c = 0; c < NQ; ++c) A[r * NK + c] = M[r * NQ + c];
-        b[r] = F[r] + S[r * 3] * T[0] + S[r * 3 + 1] * T[1] + S[r * 3 + 2] * T[2];
-    }
+    for (int i = 0; i < NQ; ++i)
+        B[i] = F[i] + S[i * 3] * T[0] + S[i * 3 + 1] * T[1] + S[i * 3 + 2] * T[2];
+    for (int k = 0; k < NC; ++k)
+        for (int i = 0; i < NQ; ++i) B[(k + 1) * NQ + i] = D[k * NQ + i];
+    int status = cholesky(NQ, M);
+    if (status) goto fail;
+    cholesky_solve(NQ, M, NC + 1, B);              /* B = [a0; X^T] */
+    const double *a0 = B, *Xt = B + NQ;
     for (int k = 0; k < NC; ++k) {
-        double Ddq = 0.0;
-        for (int c = 0; c < NQ; ++c) {
-            A[(NQ + k) * NK + c] = D[k * NQ + c];
-            A[c * NK + NQ + k] = D[k * NQ + c];
-            Ddq += D[k * NQ + c] * dq[c];
+        double Da0 = 0.0, Ddq = 0.0;
+        for (int i = 0; i < NQ; ++i) { Da0 += D[k * NQ + i] * a0[i]; Ddq += D[k * NQ + i] * dq[i]; }
+        r[k] = Da0 + bias[k] + 2.0 * a1 * Ddq + a2 * a2 * C[k];
+        for (int l = 0; l <= k; ++l) {
+            double s = 0.0;
+            for (int i = 0; i < NQ; ++i) s += D[k * NQ + i] * Xt[l * NQ + i];
+            DX[k * NC + l] = s;
+            DX[l * NC + k] = s;
         }
-        b[NQ + k] = -bias[k] - 2.0 * a1 * Ddq - a2 * a2 * C[k];
     }
-    int status = solve_dense(NK, A, b);
-    for (int i = 0; i < NQ; ++i) ddq[i] = b[i];
-    for (int k = 0; k < NC; ++k) lam[k] = b[NQ + k];
+    status = cholesky(NC, DX);
+    if (status) goto fail;
+    cholesky_solve(NC, DX, 1, r);                  /* r = lambda */
+    for (int i = 0; i < NQ; ++i) {
+        double s = a0[i];
+        for (int k = 0; k < NC; ++k) s -= Xt[k * NQ + i] * r[k];
+        ddq[i] = s;
+        if (!isfinite(s)) status = 2;
+    }
+    for (int k = 0; k < NC; ++k) lam[k] = r[k];
+    return status;
+fail:
+    for (int i = 0; i < NQ; ++i) ddq[i] = 0.0;
+    for (int k = 0; k < NC; ++k) lam[k] = 0.0;
     return status;
 }
 
