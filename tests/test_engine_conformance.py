@@ -1,0 +1,182 @@
+"""Engine conformance: one check per property, parametrized over engines and contact models.
+
+The reference engine (the thesis's equations, generated C) is compared with every other
+engine term by term. Tolerances and their reasons live in comparisons/tolerances.toml; the
+random states come from hypothesis (large angles, fast spins, steer near +-pi/2).
+"""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from comparisons.terms import QUANTITIES, States, compare_term, compare_terms, random_states
+from comparisons.tolerances import load_tolerances
+from engines import CAPABILITIES, CapabilityError, Engine, EngineError, load_engine
+from reference_model import load_model
+from reference_model.scenarios import SCENARIOS, run_inverse
+
+MODELS = ("thesis", "thesis-disc")
+OTHER_ENGINES = ("pinocchio",)
+TOLERANCES = load_tolerances()
+
+
+@pytest.fixture(scope="module", params=MODELS)
+def model(request):
+    return load_model(request.param)
+
+
+@pytest.fixture(scope="module", params=OTHER_ENGINES)
+def pair(request, model):
+    return load_engine("reference", model), load_engine(request.param, model)
+
+
+angle = st.floats(-np.pi, np.pi)
+state = st.tuples(
+    st.lists(st.floats(-10, 10), min_size=2, max_size=2),           # xc, yc
+    angle, st.floats(-1.3, 1.3), angle, st.floats(-0.6, 0.6),         # phi, theta, psi, beta
+    st.one_of(st.floats(-1.5, 1.5), st.sampled_from([-1.5707, 1.5707, 1.57])),  # gamma, incl. +-pi/2
+    angle,                                                             # eps
+    st.lists(st.floats(-30, 30), min_size=8, max_size=8),              # rates, incl. fast spins
+    st.lists(st.floats(-10, 10), min_size=8, max_size=8),              # accelerations
+    st.lists(st.floats(-20, 20), min_size=3, max_size=3),              # torques
+)
+
+
+def _states(s) -> States:
+    (xy, phi, theta, psi, beta, gamma, eps, dq, ddq, T) = s
+    q = np.array([[*xy, phi, theta, psi, beta, gamma, eps]])
+    return States(q, np.array([dq]), np.array([ddq]), np.array([T]))
+
+
+@pytest.mark.parametrize("quantity", QUANTITIES)
+@settings(max_examples=25)
+@given(s=state)
+def test_term_matches_reference(pair, quantity, s):
+    ref, other = pair
+    res = compare_term(quantity, ref, other, _states(s), TOLERANCES[quantity])
+    assert res.passed, res.describe()
+
+
+@pytest.mark.parametrize("quantity", QUANTITIES)
+def test_term_matches_reference_on_a_sweep(pair, quantity):
+    """The same over 200 deterministic states (reproducible numbers for the notes)."""
+    res = compare_term(quantity, *pair, random_states(200, seed=7), TOLERANCES[quantity])
+    assert res.passed, res.describe()
+
+
+def test_pinocchio_mass_matrix_from_rnea_columns(model):
+    """Pinocchio's own consistency, as its test suite checks it: column j of M is
+    rnea(q, 0, e_j) - rnea(q, 0, 0) (gravity cancels), equal to the symmetrised crba."""
+    import pinocchio as pin
+    eng = load_engine("pinocchio", model)
+    pm, data = eng.pin_model, eng.pin_model.createData()
+    for q in random_states(20, seed=3).q:
+        g = pin.rnea(pm, data, q, np.zeros(8), np.zeros(8)).copy()
+        cols = np.column_stack([pin.rnea(pm, data, q, np.zeros(8), e) - g for e in np.eye(8)])
+        M = eng.mass_matrix(q)
+        # round-off of 8 RNEA passes relative to max|M| (~1e2): ~1e-15; 1e-12 as for M
+        assert np.abs(cols - M).max() <= 1e-12 * np.abs(M).max()
+
+
+def test_joint_order_is_the_thesis_order(model):
+    eng = load_engine("pinocchio", model)
+    assert tuple(eng.pin_model.names[1:]) == model.coordinates
+    assert list(eng.pin_model.idx_qs[1:]) == list(range(8))
+
+
+def test_zigzag_inverse_dynamics_through_pinocchio(model):
+    """Pinocchio's M, forces and constraints in the thesis's 13x13 system, along the
+    zig-zag's inverse kinematics (also integrated on Pinocchio's D), give the reference's
+    torques to 1e-8 N m: the torques reach 266 N m, the two D agree to 1e-15, so the
+    integrated motions agree to ~1e-12 and the torques to ~1e-10 N m."""
+    sc = SCENARIOS["zigzag"]
+    ref = run_inverse(model, sc)
+    pin_res = run_inverse(load_engine("pinocchio", model), sc)
+    assert np.abs(pin_res.T - ref.T).max() <= 1e-8
+    assert np.abs(pin_res.lam - ref.lam).max() <= 1e-8 * max(1.0, np.abs(ref.lam).max())
+
+
+def test_replay_forward_on_pinocchio_tracks_reference():
+    """The replay on Pinocchio's right-hand side, same integrator (DOP853, rtol 1e-10) and
+    same torque spline, stays within 1e-8 of the reference over its first second: the two
+    right-hand sides agree to ~1e-13 and the integrator's error control is identical, so
+    only their difference propagates (the bike's instability grows it ~e^(3 t))."""
+    from reference_model.scenarios import initial_state, torque_input
+    from reference_model.solvers import simulate
+    model = load_model("thesis")
+    sc = SCENARIOS["replay"]
+    init = initial_state(model, sc)
+    torque = torque_input(model, sc)
+    t = sc.t[:101]
+    ref = simulate(model, init.q, init.dq, t, torque, rtol=1e-10)
+    pin_traj = simulate(load_engine("pinocchio", model), init.q, init.dq, t, torque, rtol=1e-10)
+    assert ref.status == pin_traj.status == "completed"
+    assert np.abs(pin_traj.q - ref.q).max() <= 1e-8
+    assert np.abs(pin_traj.dq - ref.dq).max() <= 1e-8
+
+
+# -- negative controls: a 1e-6 change in one engine only must fail and name the term ----------
+
+@pytest.mark.parametrize("change, expected", [
+    ({"I3xz": 1e-6}, "mass_matrix"),
+    ({"I4yy": 1e-6}, "mass_matrix"),
+    ({"I2yy": -1e-6}, "mass_matrix"),   # downwards: the thin-disc wheel is at the triangle limit
+    ({"x3": 1e-6}, "gravity"),
+    ({"z3": 1e-6}, "gravity"),
+    ({"x5": 1e-6}, "constraint_jacobian"),
+    ({"R_front": 1e-6}, "constraint_jacobian"),
+])
+def test_negative_control_is_detected_and_named(change, expected):
+    model = load_model("thesis")
+    p = model.params
+    perturbed = model.with_params(p.replace(**{k: getattr(p, k) + v for k, v in change.items()}))
+    ref = load_engine("reference", model)
+    bad = load_engine("pinocchio", perturbed)
+    results = {r.quantity: r for r in compare_terms(ref, bad, random_states(30, seed=11))}
+    assert not results[expected].passed, f"{change} not detected in {expected}"
+    # and the entry it names involves the coordinate the parameter acts on
+    assert results[expected].worst_entry
+
+
+def test_negative_control_leaves_unrelated_terms_passing():
+    """An inertia change does not touch gravity or the constraints: the suite localises."""
+    model = load_model("thesis")
+    bad = load_engine("pinocchio", model.with_params(model.params.replace(I3xz=model.params.I3xz + 1e-6)))
+    results = {r.quantity: r for r in compare_terms(load_engine("reference", model), bad,
+                                                    random_states(30, seed=12))}
+    assert not results["mass_matrix"].passed
+    assert results["gravity"].passed and results["constraint_jacobian"].passed
+    assert results["constraint_bias"].passed
+
+
+# -- the interface itself -----------------------------------------------------------------
+
+def test_unknown_engine_is_a_clear_error(model):
+    with pytest.raises(EngineError, match="unknown engine 'bullet'.*available: reference, pinocchio"):
+        load_engine("bullet", model)
+
+
+def test_missing_capability_names_engine_and_capability(model):
+    class Partial(Engine):
+        name = "partial"
+        capabilities = frozenset({"mass_matrix"})
+    with pytest.raises(CapabilityError, match="engine 'partial' cannot compute constraint_jacobian"):
+        Partial(model).constraint_jacobian(np.zeros(8))
+
+
+@pytest.mark.parametrize("name", ("reference", "pinocchio"))
+def test_declared_capabilities_are_implemented(model, name):
+    eng = load_engine(name, model)
+    assert set(eng.capabilities) <= set(CAPABILITIES)
+    s = random_states(2, seed=5)
+    for cap in eng.capabilities - {"simulate"}:
+        out = {"mass_matrix": lambda: eng.mass_matrix(s.q[0]),
+               "inverse_dynamics": lambda: eng.inverse_dynamics(s.q[0], s.dq[0], s.ddq[0]),
+               "gravity": lambda: eng.gravity(s.q[0]),
+               "generalized_forces": lambda: eng.generalized_forces(s.q[0], s.dq[0], s.T[0]),
+               "constraint_jacobian": lambda: eng.constraint_jacobian(s.q[0]),
+               "constraint_bias": lambda: eng.constraint_bias(s.q[0], s.dq[0]),
+               "forward_acceleration": lambda: eng.forward_acceleration(s.q[0], s.dq[0], s.T[0]),
+               }[cap]()
+        assert np.all(np.isfinite(out))
