@@ -105,21 +105,34 @@ def cmd_inverse_dynamics(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from reference_model.scenarios import run_forward
     if not 0 < args.rtol < 1:
         raise UsageError(f"--rtol must be in (0, 1); got {args.rtol}")
     if not args.atol > 0:
         raise UsageError(f"--atol must be positive; got {args.atol}")
     if not 0 < args.fall_limit <= np.pi:
         raise UsageError(f"--fall-limit must be an angle in (0, pi] rad; got {args.fall_limit}")
+    if args.engine != "exudyn" and (args.build is not None or args.step is not None):
+        raise UsageError("--build and --step apply to --engine exudyn only")
+    if args.step is not None and not 0 < args.step <= 0.1:
+        raise UsageError(f"--step must be in (0, 0.1] s; got {args.step}")
     sc = _scenario(args.scenario, "forward")
     model = _load(args.model, args.contact)
-    kwargs = dict(rtol=args.rtol, atol=args.atol, fall_limit=args.fall_limit)
-    traj = run_forward(model, sc, constraints=args.constraints, **kwargs)
+    from engines import load_engine
+    if args.engine == "exudyn":
+        options = {k: v for k, v in (("build", args.build), ("step", args.step)) if v is not None}
+        engine = load_engine("exudyn", model, **options)
+        traj = engine.simulate(sc, fall_limit=args.fall_limit)
+    else:
+        engine = load_engine(args.engine, model)
+        traj = engine.simulate(sc, constraints=args.constraints, rtol=args.rtol, atol=args.atol,
+                               fall_limit=args.fall_limit)
     _write_csv(simulation_frame(traj), args.out)
-    print(f"{sc.name} on {model.name} ({model.contact} contact, constraints: "
-          f"{traj.settings['constraints']}): {traj.status}: {traj.message}")
-    print(f"  initial state: {traj.settings['initial_correction']}")
+    how = ", ".join(f"{k}: {v}" for k, v in traj.settings.items()
+                    if k in ("constraints", "build", "step", "solver") and v is not None)
+    print(f"{sc.name} on {args.engine} / {model.name} ({model.contact} contact, {how}): "
+          f"{traj.status}: {traj.message}")
+    if "initial_correction" in traj.settings:
+        print(f"  initial state: {traj.settings['initial_correction']}")
     print(f"  {len(traj.t)} samples to t = {traj.t_end:.4f} s -> {args.out}; "
           f"max |C| = {np.abs(traj.C).max():.2e}")
     return EXIT_FAIL if traj.status == "failed" else EXIT_OK
@@ -131,6 +144,7 @@ def cmd_run(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from engines import ENGINES
     from reference_model.solvers import CONSTRAINT_HANDLING, DEFAULT_FALL_LIMIT
 
     p = _Parser(prog="bicycle-xval", description="Cross-validation harness for the thesis bicycle.")
@@ -160,6 +174,11 @@ def build_parser() -> argparse.ArgumentParser:
     model_opts(s)
     s.add_argument("--scenario", required=True, help="a forward scenario (replay, stability-psid*)")
     s.add_argument("--out", required=True, type=Path, help="CSV file to write")
+    s.add_argument("--engine", choices=ENGINES, default="reference",
+                   help="engine to run the scenario on [reference]")
+    s.add_argument("--build", choices=("redundant", "tree"), default=None,
+                   help="Exudyn only: redundant bodies + joints, or the kinematic tree [engine default]")
+    s.add_argument("--step", type=float, default=None, help="Exudyn only: time step, s [engine default]")
     s.add_argument("--constraints", choices=CONSTRAINT_HANDLING, default=None,
                    help="constraint handling [the scenario's: baumgarte a1 = a2 = 10, as the thesis]")
     s.add_argument("--rtol", type=float, default=1e-10, help="relative tolerance [1e-10]")
@@ -179,6 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from reference_model import ModelEvaluationError, ParameterError
     from reference_model.scenarios import UnknownScenarioError
+    from engines import EngineError
     from reference_model.solvers import ConstraintSolveError
 
     try:
@@ -187,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
     except (UsageError, ParameterError, UnknownScenarioError) as exc:
         print(f"bicycle-xval: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    except (ModelEvaluationError, ConstraintSolveError) as exc:
+    except (ModelEvaluationError, ConstraintSolveError, EngineError) as exc:
         print(f"bicycle-xval: failed: {exc}", file=sys.stderr)
         return EXIT_FAIL
     except OSError as exc:
