@@ -216,4 +216,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Under `python -m comparisons.cli` this file runs as __main__; re-enter through the package
+    # module so exception classes are the ones the other modules import.
+    from comparisons.cli import main as _main
+    sys.exit(_main())
