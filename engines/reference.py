@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from reference_model.scenarios import Scenario, run_forward
 
 from .base import CAPABILITIES, Engine
@@ -19,9 +17,7 @@ class ReferenceEngine(Engine):
         return self.model.mass_matrix(q)
 
     def inverse_dynamics(self, q, dq, ddq):
-        m = self.model
-        M = m.mass_matrix(q)
-        return np.einsum("...ij,...j->...i", M, np.asarray(ddq, dtype=float)) - m.Qv(q, dq) - m.Qgrav(q)
+        return self.model.inverse_dynamics(q, dq, ddq)
 
     def gravity(self, q):
         return self.model.Qgrav(q)

@@ -185,6 +185,15 @@ class Model:
             raise ValueError(f"torques must have shape (3,) or (N, 3) [Mdir, Mped, Mvue]; got {T.shape}")
         return F + np.einsum("...ij,...j->...i", S, T)
 
+    def inverse_dynamics(self, q, dq, ddq) -> np.ndarray:
+        """Unconstrained inverse dynamics M ddq - Qv - Qgrav (what RNEA computes), (8,)."""
+        mb = self._eval("mass_bias", q, dq)
+        M = mb[..., :N_Q * N_Q].reshape(*mb.shape[:-1], N_Q, N_Q)
+        a = np.asarray(ddq, dtype=np.float64)
+        if a.shape[-1:] != (N_Q,):
+            raise ValueError(f"ddq must have shape (8,) or (N, 8); got {a.shape}")
+        return (M @ a[..., None])[..., 0] - mb[..., N_Q * N_Q:]
+
     def constraint_residual(self, q, dq) -> np.ndarray:
         """C = [rD_z, vC_x, vC_y, vD_x, vD_y] (front contact height, contact-point velocities)."""
         return self._eval("constraint_residual", q, dq)
