@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import oracle as o
+from strategies import coords, finite as _f, rates, states
 from thesis_params import THESIS_PARAMS
 
 P = o.params_from(THESIS_PARAMS)
@@ -19,17 +20,6 @@ P = o.params_from(THESIS_PARAMS)
 P_GEN = o.params_from({**THESIS_PARAMS, "R_front": 0.35, "dx4": 0.04, "dz4": 0.11,
                        "x5": 0.1, "z5": -0.43})
 PARAMS = {"thesis": P, "generalised": P_GEN}
-
-
-def _f(lo, hi):
-    return st.floats(lo, hi, allow_nan=False, allow_infinity=False)
-
-
-# thesis-relevant ranges: lean up to ~69 deg, steer up to ~86 deg, pitch +-0.5 rad
-coords = st.tuples(_f(-10, 10), _f(-10, 10), _f(-np.pi, np.pi), _f(-1.2, 1.2),
-                   _f(-np.pi, np.pi), _f(-0.5, 0.5), _f(-1.5, 1.5), _f(-np.pi, np.pi))
-rates = st.tuples(*[_f(-20, 20)] * 8)
-states = st.tuples(coords, rates).map(lambda t: (np.array(t[0]), np.array(t[1])))
 
 
 def scale(dq):

@@ -14,6 +14,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from thesis_params import THESIS_PARAMS
+
 from reference_model.params import (
     CONTACT_MODELS,
     NAMED_MODELS,
@@ -29,38 +31,7 @@ from reference_model.params import (
 )
 
 # The thesis numbers (din_Bicicleta), written independently of thesis.toml.
-THESIS_VALUES: dict[str, float] = {
-    "R_rear": 0.32,
-    "R_front": 0.32,
-    "x3": 0.23 + 0.03047,
-    "z3": 0.55 + 0.39687,
-    "xa": 0.85 + 0.05109,  # thesis x4
-    "za": 0.55 - 0.14221,  # thesis z4
-    "dx4": 0.0,
-    "dz4": 0.0,
-    "x5": 0.12 - 0.05109,
-    "z5": -0.55 + 0.14221,
-    "m2": 2.612,
-    "m3": 77.391,
-    "m4": 1.725,
-    "m5": 2.612,
-    "I2xx": 0.108,
-    "I2yy": 0.216,
-    "I2zz": 0.108,
-    "I3xx": 20.213,
-    "I3yy": 21.769,
-    "I3zz": 3.205,
-    "I3xz": -1.820,
-    "I4xx": 0.116,
-    "I4yy": 0.103,
-    "I4zz": 0.025,
-    "I4xz": 0.018,
-    "I5xx": 0.108,
-    "I5yy": 0.216,
-    "I5zz": 0.108,
-    "g": 9.81,
-    "cv": 0.8,
-}
+THESIS_VALUES: dict[str, float] = THESIS_PARAMS  # typed in by hand from the listing
 
 THESIS_TEXT = THESIS_FILE.read_text(encoding="utf-8")
 

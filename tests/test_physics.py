@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 
 import oracle as o
 from reference_model import load_model
+from strategies import coords, finite as _f, rates, states, torques
 from thesis_params import THESIS_PARAMS
 
 MODEL_NAMES = ("thesis", "thesis-disc")
@@ -54,19 +55,6 @@ def p(model):
 @pytest.fixture(scope="module")
 def contact(name):
     return CONTACT[name]
-
-
-def _f(lo, hi):
-    return st.floats(lo, hi, allow_nan=False, allow_infinity=False)
-
-
-# xc, yc, phi, theta, psi, beta, gamma, eps: steer up to ~86 deg (near +-pi/2 included),
-# lean up to ~69 deg, pitch +-0.5 rad; rates up to 20 rad/s or m/s
-coords = st.tuples(_f(-10, 10), _f(-10, 10), _f(-np.pi, np.pi), _f(-1.2, 1.2),
-                   _f(-np.pi, np.pi), _f(-0.5, 0.5), _f(-1.5, 1.5), _f(-np.pi, np.pi))
-rates = st.tuples(*[_f(-20, 20)] * 8)
-states = st.tuples(coords, rates).map(lambda t: (np.array(t[0]), np.array(t[1])))
-torques = st.tuples(_f(-50, 50), _f(-50, 50), _f(-50, 50)).map(np.array)
 
 
 def vscale(dq):
