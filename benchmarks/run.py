@@ -496,6 +496,75 @@ def bench_exudyn() -> list[Row]:
             Row("exudyn_system", "exu.SystemContainer() + AddSystem()", t_sc)]
 
 
+# -- 8. Exudyn forward runs against the reference ---------------------------------------------
+
+def bench_exudyn_scenarios(quick: bool) -> list[Row]:
+    """Wall time of each forward scenario on thesis-disc (the contact both Exudyn builds
+    realise): the reference (`run_forward`, default settings: Baumgarte, DOP853 rtol 1e-10)
+    and Exudyn's tree and redundant builds at h = 1e-3, one run each, in the same process.
+    Each wall time covers the whole call (initial projection, the replay's torque spline,
+    building the Exudyn system, the run). The thesis-disc library is compiled into a fresh
+    temporary cache (timed as a row), so the user's cache is not touched."""
+    from engines import load_engine
+    from reference_model import load_model
+    from reference_model.scenarios import SCENARIOS, run_forward
+
+    step = 1e-3
+    names = ("stability-psid10",) if quick else (
+        "replay", "stability-psid0", "stability-psid1", "stability-psid5", "stability-psid10")
+    old = os.environ.get("BICYCLE_XVAL_CACHE")
+    with tempfile.TemporaryDirectory(prefix="bicycle-xval-bench-disc-") as tmp:
+        os.environ["BICYCLE_XVAL_CACHE"] = tmp
+        try:
+            t0 = time.perf_counter()
+            disc = load_model("thesis-disc")
+            t_load = time.perf_counter() - t0
+        finally:
+            if old is None:
+                os.environ.pop("BICYCLE_XVAL_CACHE", None)
+            else:
+                os.environ["BICYCLE_XVAL_CACHE"] = old
+    rows = [Row("exudyn_disc_load", "load_model('thesis-disc'), fresh temporary cache"
+                + (" (compiled)" if disc.library.built_now else ""), t_load)]
+    engines = {b: load_engine("exudyn", disc, build=b, step=step)
+               for b in ("tree", "redundant")}
+    for eng in engines.values():   # first-call costs (imports, symbolic machinery) not timed
+        eng.simulate(SCENARIOS["stability-psid0"], t_end=0.05)
+    for name in names:
+        sc = SCENARIOS[name]
+        t0 = time.perf_counter()
+        ref = run_forward(disc, sc)
+        t_ref = time.perf_counter() - t0
+        rows.append(Row(f"exudyn_{name}_reference",
+                        f"{name}, reference thesis-disc ({ref.status} at {ref.t_end:.2f} s)", t_ref,
+                        details={"status": ref.status, "t_end": ref.t_end,
+                                 "wall_per_simulated_s": t_ref / ref.t_end,
+                                 "settings": {k: ref.settings[k] for k in
+                                              ("integrator", "rtol", "atol", "constraints")},
+                                 "nfev": ref.timing["nfev"]}))
+        for build, eng in engines.items():
+            t0 = time.perf_counter()
+            tr = eng.simulate(sc)
+            wall = time.perf_counter() - t0
+            ratio = wall / t_ref
+            # the runs may end at different times (a fall): also per simulated second
+            ratio_sim = (wall / tr.t_end) / (t_ref / ref.t_end)
+            rows.append(Row(
+                f"exudyn_{name}_{build}",
+                f"  Exudyn {build}, h = {step:g} ({tr.status} at {tr.t_end:.2f} s): "
+                f"{ratio:.3g}x ref, {ratio_sim:.3g}x per simulated s", wall,
+                details={"status": tr.status, "t_end": tr.t_end, "ratio_to_reference": ratio,
+                         "wall_per_simulated_s": wall / tr.t_end,
+                         "ratio_to_reference_per_simulated_s": ratio_sim,
+                         "steps": tr.timing["steps"],
+                         "newton_iterations": tr.timing.get("newton_iterations"),
+                         "solve_s": tr.timing["solve_seconds"],
+                         "build_s": tr.timing["build_seconds"],
+                         "solver": tr.settings["solver_type"],
+                         "spectral_radius": tr.settings["spectral_radius"]}))
+    return rows
+
+
 # -- output ------------------------------------------------------------------------------------
 
 def table(rows: list[Row], crba: float) -> str:
@@ -590,6 +659,8 @@ def main(argv: list[str] | None = None) -> int:
     rows.append(Row("import_pinocchio", "import pinocchio (in-process"
                     + (", already loaded)" if pin_already else ")"), t_pin_import))
     rows += bench_exudyn()
+    progress("Exudyn forward runs against the reference (thesis-disc)...")
+    rows += bench_exudyn_scenarios(args.quick)
     crba = pin_micro[0].best
 
     print()
