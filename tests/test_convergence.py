@@ -25,16 +25,6 @@ HORIZON = 0.5     # s: stability-psid10 before the steer runs away (~0.6 s), whe
 
 
 @pytest.fixture(scope="module")
-def disc():
-    return load_model("thesis-disc")
-
-
-@pytest.fixture(scope="module")
-def thesis():
-    return load_model("thesis")
-
-
-@pytest.fixture(scope="module")
 def tree_factory(disc):
     return lambda h: load_engine("exudyn", disc, build="tree", step=h)
 

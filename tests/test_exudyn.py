@@ -25,16 +25,6 @@ BUILDS = ("tree", "redundant")
 
 
 @pytest.fixture(scope="module")
-def disc():
-    return load_model("thesis-disc")
-
-
-@pytest.fixture(scope="module")
-def thesis():
-    return load_model("thesis")
-
-
-@pytest.fixture(scope="module")
 def ref_psid10(disc):
     return run_forward(disc, SCENARIOS["stability-psid10"], constraints="projection", rtol=1e-11)
 

@@ -41,11 +41,6 @@ def model():
 
 
 @pytest.fixture(scope="module")
-def disc():
-    return load_model("thesis-disc")
-
-
-@pytest.fixture(scope="module")
 def P(model):
     """The model's parameters as read by the oracle."""
     return o.params_from(model.params)
