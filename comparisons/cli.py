@@ -140,7 +140,8 @@ def cmd_simulate(args) -> int:
 
 def cmd_run(args) -> int:
     from .reference_run import run_reference_report
-    return run_reference_report(args.out, scenarios=args.scenarios, quick=args.quick)
+    return run_reference_report(args.out, scenarios=args.scenarios, quick=args.quick,
+                                engines=args.engines)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -190,6 +191,8 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("run", help="run every scenario and write the report")
     s.add_argument("--out", type=Path, default=Path("reports/latest"), help="output folder [reports/latest]")
     s.add_argument("--scenarios", default=None, help="comma-separated subset of scenarios")
+    s.add_argument("--engines", default=None,
+                   help="comma-separated engines to compare with the reference [all: reference,pinocchio,exudyn]")
     s.add_argument("--quick", action="store_true", help="a fast subset")
     s.set_defaults(func=cmd_run)
     return p
