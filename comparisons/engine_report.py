@@ -94,6 +94,26 @@ def pinocchio_terms(out: Path, n_states: int, progress: Callable[[str], None]) -
     return sec
 
 
+def exudyn_terms(n_states: int, progress) -> Section:
+    """The terms Exudyn's kinematic tree provides (M, and Qv + Qgrav + Qaero + S T)."""
+    sec = Section("Reference vs Exudyn kinematic tree, term by term")
+    sec.lines += [f"At {n_states} deterministic states, `thesis-disc` (the terms do not depend on "
+                  "the contact model): M from Exudyn's ComputeMassMatrix in the thesis's joint "
+                  "coordinates.", "", "| quantity | max error | tolerance | verdict | worst entry |",
+                  "|---|---|---|---|---|"]
+    progress("  Exudyn tree terms ...")
+    model = load_model("thesis-disc")
+    ref, exu = load_engine("reference", model), load_engine("exudyn", model, build="tree")
+    for r in compare_terms(ref, exu, random_states(n_states, seed=7)):
+        sec.lines.append(f"| {r.quantity} | {r.max_error:.1e} | {r.tolerance:.0e} | "
+                         f"{'pass' if r.passed else 'FAIL'} | {_md(r.worst_entry)} |")
+        sec.comparisons.append({
+            "quantity": r.quantity, "scenario": f"random-states-{n_states}", "model": model.name,
+            "engines": ["reference", "exudyn-tree"], "max_error": r.max_error,
+            "tolerance": r.tolerance, "passed": r.passed, "localized_to": r.worst_entry})
+    return sec
+
+
 # -- Exudyn: trajectories up to the horizon --------------------------------------------------
 
 def exudyn_trajectories(out: Path, scenarios, progress) -> Section:
@@ -222,6 +242,7 @@ def run_engine_stage(out: Path, engines, quick: bool, progress) -> list[Section]
         progress("engines: Pinocchio term by term ...")
         sections.append(pinocchio_terms(out, 50 if quick else 200, progress))
     if "exudyn" in engines:
+        sections.append(exudyn_terms(20 if quick else 100, progress))
         progress("engines: Exudyn trajectories ...")
         sections.append(exudyn_trajectories(out, QUICK_FORWARD if quick else FORWARD, progress))
         progress("engines: Exudyn convergence ...")
