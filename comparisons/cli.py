@@ -139,8 +139,8 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from .reference_run import run_reference_report
-    return run_reference_report(args.out, scenarios=args.scenarios, quick=args.quick,
+    from .runner import run_report
+    return run_report(args.out, scenarios=args.scenarios, quick=args.quick,
                                 engines=args.engines)
 
 

@@ -1,9 +1,7 @@
-"""`bicycle-xval run`, reference stage: every scenario on the reference model, with the checks
-that need no second engine (analytic pedal torque, constraint residuals, the thesis's claims
-as far as the reference model alone can judge them), CSV data, figures and a report.
-
-Engine comparisons (Pinocchio, Exudyn) and the full tolerance report are later stages
-(issues 3-5); this module writes only what it computes.
+"""`bicycle-xval run`: every scenario on the reference model with the checks that need no
+second engine (analytic pedal torque, constraint residuals, the thesis's claims as far as the
+reference alone can judge them), then the engine stage (`engine_report`), written as
+report.md, summary.json, CSV data and figures; run times kept apart in timings.json.
 """
 
 from __future__ import annotations
@@ -41,7 +39,7 @@ def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def run_reference_report(out: Path, scenarios: str | None = None, quick: bool = False,
+def run_report(out: Path, scenarios: str | None = None, quick: bool = False,
                          engines: str | None = None) -> int:
     import matplotlib
     matplotlib.use("Agg")
