@@ -66,6 +66,7 @@ def run_report(out: Path, scenarios: str | None = None, quick: bool = False,
     models = {}
     checks, timings, rows = [], {}, []
     corrections: dict[str, str] = {}
+    idents = {}  # inverse-dynamics results of this run, reused by the replay check
     stability = {}
     for k, name in enumerate(names, 1):
         sc = get_scenario(name)
@@ -74,6 +75,7 @@ def run_report(out: Path, scenarios: str | None = None, quick: bool = False,
         t0 = time.perf_counter()
         if sc.kind == "inverse":
             frame, res = inverse_dynamics_frame(model, sc)
+            idents[(name, model.name)] = res
             C = model.constraint_residual(res.motion.q, res.motion.dq)
             rows.append((name, "inverse", "completed", f"{res.motion.t[-1]:.2f}",
                          f"{np.abs(C).max():.1e}"))
@@ -104,7 +106,9 @@ def run_report(out: Path, scenarios: str | None = None, quick: bool = False,
             if sc.tags and "stability" in sc.tags:
                 stability[name] = traj
             if name == "replay":
-                _, ident = inverse_dynamics_frame(model, get_scenario("zigzag"))
+                ident = idents.get(("zigzag", model.name))
+                if ident is None:  # zigzag not selected in this run
+                    _, ident = inverse_dynamics_frame(model, get_scenario("zigzag"))
                 n = len(traj.t)
                 dev = np.abs(traj.q[:, [3, 6]] - ident.motion.q[:n, [3, 6]]).max(axis=1)
                 first = np.flatnonzero(dev > 1e-3)

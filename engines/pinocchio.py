@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from reference_model import COORDINATES, Model
-from reference_model.model import DEP, IND, ForwardResult
+from reference_model.model import DEP, IND, ForwardResult, raise_on_status
 from reference_model.scenarios import Scenario, run_forward, run_inverse
 
 from .base import CAPABILITIES, Engine, EngineError
@@ -107,7 +107,7 @@ class PinocchioEngine(Engine):
         self._com3 = np.array([p.x3, 0.0, p.z3])
         self._disc = model.contact == "disc"
         # duck-typed attributes the reference solvers read
-        self.params, self.contact, self.name_model = p, model.contact, model.name
+        self.params, self.contact = p, model.contact
         self.coordinates = COORDINATES
 
     # -- batching ----------------------------------------------------------------------
@@ -288,8 +288,7 @@ class PinocchioEngine(Engine):
     def forward_acceleration(self, q, dq, torques=(0.0, 0.0, 0.0)):
         res = self.forward(q, dq, torques)
         if res.status.any():
-            from reference_model.model import _raise_on_status
-            _raise_on_status(res.status, "pinocchio forward_acceleration")
+            raise_on_status(res.status, "pinocchio forward_acceleration")
         return res.ddq
 
     def inverse_dynamics_step(self, q, dq, ddq_ind):

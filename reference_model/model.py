@@ -260,7 +260,7 @@ class Model:
         singular or non-finite state."""
         res = self.forward(q, dq, torques)
         if res.status.any():
-            _raise_on_status(res.status, "forward_acceleration")
+            raise_on_status(res.status, "forward_acceleration")
         return res.ddq
 
     def inverse_dynamics_step(self, q, dq, ddq_ind):
@@ -288,7 +288,8 @@ class Model:
         return ddq, T, lam, status
 
 
-def _raise_on_status(status: np.ndarray, what: str) -> None:
+def raise_on_status(status: np.ndarray, what: str) -> None:
+    """Raise ModelEvaluationError for the first non-zero status of a forward solve."""
     bad = np.flatnonzero(status)
     if bad.size:
         i = int(bad[0])
