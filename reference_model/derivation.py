@@ -25,6 +25,10 @@ a steering-axis point A distinct from the fork's centre of mass, and the front h
 relative to A. With ``R_rear = R_front = R``, ``xa, za = x4, z4`` and ``dx4 = dz4 = 0`` it is
 the thesis exactly. Two front-contact models: ``thesis`` (the rim point along the fork's
 -z axis, as published) and ``disc`` (the true lowest point of the front disc).
+
+``gyroscopic=False`` derives a deliberately broken variant without the gyroscopic terms
+``-w_iL x (I_i w_iL)`` in Qv (the fault-injection suite, `comparisons/faults.py`, checks that
+the engine comparison detects and localizes it); the default is the thesis model.
 """
 
 from __future__ import annotations
@@ -147,7 +151,7 @@ class Kinematics:
 
 @dataclass
 class Derivation:
-    """Everything the code generator needs for one contact variant."""
+    """Everything the code generator needs for one variant (contact model, gyroscopic terms)."""
 
     contact: str
     symbols: Symbols
@@ -165,6 +169,7 @@ class Derivation:
     Qaero: sp.Matrix | None = None
     kinetic: sp.Expr | None = None         # over placeholders
     potential: sp.Expr | None = None
+    gyroscopic: bool = True                # False: Qv without -w_iL x I_i w_iL (a fault variant)
 
 
 def front_contact(contact: str, rG5: sp.Matrix, A4: sp.Matrix, R_front) -> sp.Matrix:
@@ -186,8 +191,11 @@ def front_contact(contact: str, rG5: sp.Matrix, A4: sp.Matrix, R_front) -> sp.Ma
     raise ValueError(f"contact must be one of {CONTACT_MODELS}, got {contact!r}")
 
 
-def derive(contact: str) -> Derivation:
-    """Derive the thesis bicycle for a front-contact model ('thesis' or 'disc')."""
+def derive(contact: str, gyroscopic: bool = True) -> Derivation:
+    """Derive the thesis bicycle for a front-contact model ('thesis' or 'disc').
+
+    ``gyroscopic=False`` drops the gyroscopic terms -w_iL x (I_i w_iL) from Qv (a fault
+    variant for the fault-injection suite; everything else is unchanged)."""
     if contact not in CONTACT_MODELS:
         raise ValueError(f"contact must be one of {CONTACT_MODELS}, got {contact!r}")
     sy = make_symbols()
@@ -237,7 +245,7 @@ def derive(contact: str) -> Derivation:
     der = Derivation(
         contact=contact, symbols=sy, bodies=bodies,
         points={"rC": rC, "rA": rA, "rG2": rG2, "rG3": rG3, "rG4": rG4, "rG5": rG5, "rD": rD},
-        C=C, D=D, bias=bias, S=S, vG3=bodies[3].H * dq,
+        C=C, D=D, bias=bias, S=S, vG3=bodies[3].H * dq, gyroscopic=bool(gyroscopic),
     )
     _project_dynamics(der, P)
     return der
@@ -272,6 +280,7 @@ def _project_dynamics(der: Derivation, P: dict) -> None:
     Written body by body, which is the same sum without forming the 24x24 MM:
       M     = sum_i m_i H_i^T H_i + G_iL^T I_i G_iL
       Qv    = sum_i -m_i H_i^T (h_i dq) + G_iL^T (-w_iL x I_i w_iL - I_i g_iL dq)
+              (without the gyroscopic -w_iL x I_i w_iL when der.gyroscopic is False)
       Qgrav = sum_i H_i^T [0, 0, -m_i g]
       Qaero = -cv |vG3| H3^T vG3
     """
@@ -295,7 +304,8 @@ def _project_dynamics(der: Derivation, P: dict) -> None:
         vG = _ph_matrix(der, f"vG{i}", b.H * dq)
         zG = _placeholder(der, f"zG{i}", b.rG[2])
         M += m * (H.T * H) + GL.T * I * GL
-        Qv += -m * (H.T * hdq) + GL.T * (-_cross(wL, I * wL) - I * gdq)
+        gyro = -_cross(wL, I * wL) if der.gyroscopic else sp.zeros(3, 1)
+        Qv += -m * (H.T * hdq) + GL.T * (gyro - I * gdq)
         Qgrav += -m * g * H[2, :].T
         kinetic += sp.Rational(1, 2) * (m * (vG.T * vG)[0, 0] + (wL.T * I * wL)[0, 0])
         potential += m * g * zG

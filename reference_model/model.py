@@ -51,8 +51,8 @@ _dbl = ctypes.c_double
 
 
 @functools.lru_cache(maxsize=None)
-def _library(contact: str) -> codegen.Library:
-    lib = codegen.build(contact)
+def _library(contact: str, gyroscopic: bool = True) -> codegen.Library:
+    lib = codegen.build(contact, gyroscopic=gyroscopic)
     for name in lib.functions:
         fn = getattr(lib.lib, f"bx_{name}_batch")
         fn.argtypes = [_long, _dp, _dp, _dp, _dp]
@@ -90,7 +90,9 @@ class Model:
 
     Attributes: ``params`` (validated `Parameters`), ``contact`` ('thesis' or 'disc'),
     ``name``, ``coordinates`` (the thesis order), ``independent`` / ``dependent``
-    coordinate names, ``library`` (the compiled code and its cache folder).
+    coordinate names, ``library`` (the compiled code and its cache folder), ``gyroscopic``
+    (True, the thesis model; ``Model(params, gyroscopic=False)`` is a deliberately broken
+    variant without the gyroscopic terms in Qv, for the fault-injection suite).
     """
 
     coordinates = COORDINATES
@@ -100,11 +102,12 @@ class Model:
     torque_names = TORQUE_NAMES
     body_names = BODY_NAMES
 
-    def __init__(self, params: Parameters):
+    def __init__(self, params: Parameters, *, gyroscopic: bool = True):
         self.params = params
         self.contact = params.contact
         self.name = params.name
-        self.library = _library(params.contact)
+        self.gyroscopic = bool(gyroscopic)
+        self.library = _library(params.contact, self.gyroscopic)
         self._p = np.ascontiguousarray(params.vector(), dtype=np.float64)
         self._pp = self._p.ctypes.data
         self._lib = self.library.lib
@@ -121,11 +124,13 @@ class Model:
         self._kernels = {name: getattr(self._lib, f"bx_{name}_batch") for name in self.library.functions}
 
     def __repr__(self) -> str:
-        return f"Model(name={self.name!r}, contact={self.contact!r}, source={self.params.source!r})"
+        variant = "" if self.gyroscopic else ", gyroscopic=False"
+        return (f"Model(name={self.name!r}, contact={self.contact!r}, "
+                f"source={self.params.source!r}{variant})")
 
     def with_params(self, params: Parameters) -> "Model":
-        """The same model class with another parameter set (e.g. a perturbed copy)."""
-        return Model(params)
+        """The same model class and variant with another parameter set (e.g. a perturbed copy)."""
+        return Model(params, gyroscopic=self.gyroscopic)
 
     # -- generic evaluation ------------------------------------------------------------
     def _eval(self, name: str, q, dq=None, shape=None):
@@ -262,6 +267,12 @@ class Model:
         if res.status.any():
             raise_on_status(res.status, "forward_acceleration")
         return res.ddq
+
+    def eigenvalues(self, v):
+        """The four roll/steer eigenvalues (1/s) of upright straight running at forward
+        speed(s) v (m/s), cyclic and constraint zeros removed (`reference_model.linearize`)."""
+        from .linearize import eigenvalues
+        return eigenvalues(self, v)
 
     def inverse_dynamics_step(self, q, dq, ddq_ind):
         """The thesis's 13x13 system at given states and independent accelerations.
