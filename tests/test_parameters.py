@@ -147,7 +147,7 @@ def test_as_dict_round_trip_and_immutability() -> None:
 
 
 def test_named_models() -> None:
-    assert set(NAMED_MODELS) == {"thesis", "thesis-disc"}
+    assert set(NAMED_MODELS) == {"thesis", "thesis-disc", "benchmark"}
     a = resolve_model("thesis")
     b = resolve_model("thesis-disc")
     assert (a.name, a.contact) == ("thesis", "thesis")
