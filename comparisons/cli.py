@@ -4,7 +4,10 @@
     bicycle-xval scenarios
     bicycle-xval inverse-dynamics --model thesis --scenario zigzag --out FILE.csv
     bicycle-xval simulate --model thesis --scenario stability-psid10 --out FILE.csv
-    bicycle-xval run [--out DIR] [--scenarios a,b] [--quick]
+    bicycle-xval run [--out DIR] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
+                     [--tolerances FILE]
+    bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn] [--json OUT]
+    bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
 
 Exit status: 0 success, 1 a run failed (solver failure) or a check did not hold,
 2 usage error (bad option, unknown model or scenario, bad parameter file), always with a
@@ -139,9 +142,38 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_run(args) -> int:
+    import os
+
     from .runner import run_report
-    return run_report(args.out, scenarios=args.scenarios, quick=args.quick,
-                                engines=args.engines)
+    from .tolerances import TOLERANCES_ENV, ToleranceError, load_tolerances
+    if args.jobs is not None and not 1 <= args.jobs <= 64:
+        raise UsageError(f"--jobs must be between 1 and 64; got {args.jobs}")
+    if args.tolerances is not None:
+        if not args.tolerances.is_file():
+            raise UsageError(f"--tolerances: no file {str(args.tolerances)!r}; copy "
+                             "comparisons/tolerances.toml and edit it")
+        try:
+            from .tolerances import TOLERANCES_FILE
+            shipped = load_tolerances(TOLERANCES_FILE)
+            mine = load_tolerances(args.tolerances)
+        except ToleranceError as exc:
+            raise UsageError(f"--tolerances: {exc}") from None
+        missing = sorted(set(shipped) - set(mine))
+        if missing:
+            raise UsageError(f"--tolerances: {args.tolerances} lacks [{missing[0]}]"
+                             f"{f' (and {len(missing) - 1} more)' if len(missing) > 1 else ''}; "
+                             "start from a copy of comparisons/tolerances.toml")
+    before = os.environ.get(TOLERANCES_ENV)
+    try:
+        if args.tolerances is not None:   # worker processes inherit it
+            os.environ[TOLERANCES_ENV] = str(args.tolerances.resolve())
+        return run_report(args.out, scenarios=args.scenarios, quick=args.quick,
+                          engines=args.engines, workers=args.jobs)
+    finally:
+        if before is None:
+            os.environ.pop(TOLERANCES_ENV, None)
+        else:
+            os.environ[TOLERANCES_ENV] = before
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -154,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     def model_opts(sp):
         sp.add_argument("--model", default="thesis",
-                        help="named model (thesis, thesis-disc) or a parameter .toml file [thesis]")
+                        help="named model (thesis, thesis-disc, benchmark) or a parameter .toml file [thesis]")
         sp.add_argument("--contact", choices=("thesis", "disc"), default=None,
                         help="override the model's front-contact model")
 
@@ -194,7 +226,16 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--engines", default=None,
                    help="comma-separated engines to compare with the reference [all: reference,pinocchio,exudyn]")
     s.add_argument("--quick", action="store_true", help="a fast subset")
+    s.add_argument("--jobs", type=int, default=None,
+                   help="worker processes for the engine runs [number of CPUs, at most 4]")
+    s.add_argument("--tolerances", type=Path, default=None,
+                   help="a tolerance file replacing comparisons/tolerances.toml (same tables)")
     s.set_defaults(func=cmd_run)
+
+    from .diagnose import add_diagnose_parser
+    from .eigenvalues import add_eigenvalues_parser
+    add_diagnose_parser(sub)
+    add_eigenvalues_parser(sub)
     return p
 
 

@@ -3,6 +3,7 @@ with its reason), and the error metric each one uses."""
 
 from __future__ import annotations
 
+import os
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -10,7 +11,8 @@ from pathlib import Path
 import numpy as np
 
 TOLERANCES_FILE = Path(__file__).with_name("tolerances.toml")
-SCALES = ("max_abs", "max_abs_or_one", "largest_term")
+TOLERANCES_ENV = "BICYCLE_XVAL_TOLERANCES"   # `bicycle-xval run --tolerances FILE` sets it
+SCALES = ("max_abs", "max_abs_or_one", "largest_term", "absolute")
 
 
 class ToleranceError(ValueError):
@@ -29,6 +31,8 @@ class Tolerance:
     def normalizer(self, reference: np.ndarray, terms: list[np.ndarray] | None = None) -> float:
         """The number an absolute error is divided by."""
         ref = np.abs(np.asarray(reference, dtype=float))
+        if self.scale == "absolute":
+            return 1.0
         if self.scale == "max_abs":
             return float(ref.max()) or 1.0
         if self.scale == "max_abs_or_one":
@@ -37,8 +41,10 @@ class Tolerance:
         return max(1.0, float(max(parts)))
 
 
-def load_tolerances(path: Path = TOLERANCES_FILE) -> dict[str, Tolerance]:
-    """All tolerances; a malformed entry raises ToleranceError naming it."""
+def load_tolerances(path: Path | None = None) -> dict[str, Tolerance]:
+    """All tolerances (from ``path``, else $BICYCLE_XVAL_TOLERANCES, else the shipped file); a
+    malformed entry raises ToleranceError naming it."""
+    path = Path(path or os.environ.get(TOLERANCES_ENV) or TOLERANCES_FILE)
     try:
         data = tomllib.loads(Path(path).read_text())
     except tomllib.TOMLDecodeError as exc:

@@ -6,6 +6,12 @@
 | zigzag             | inverse | theta = -sin(t)/3, psi = 5t, gamma = sin(t)/2 (4.3, 5.3)                  |
 | replay             | forward | zigzag's torques fed back from its initial state, Baumgarte (6.2.2.1)    |
 | stability-psidN    | forward | q0 = [0,0,0,pi/16,0,0,pi/16,0], T = [0,1,0], psi_dot(0) = N (6.2.2.2)    |
+| check-forward      | forward | check's constant pedal torque fed forward from upright rolling at 1.6 m/s |
+| benchmark-vV       | forward | model benchmark: IFToMM uncontrolled bicycle, upright at V m/s, roll rate kick, 5 s |
+
+Each scenario also names the quantities the harness compares on it (`compared`, from
+`QUANTITIES`) and the differences between engines it expects, with their reasons
+(`expected_differences`): an expected difference that stops differing is reported too.
 
 The thesis samples every scenario on t = 0:0.01:2*pi (629 samples); here t_k = 0.01 k exactly.
 Engines run the same `Scenario` objects (this module depends on nothing above the model).
@@ -23,6 +29,28 @@ from .solvers import (THESIS_BAUMGARTE, ConsistentState, IndependentMotion, Inve
                       Trajectory, consistent_state, inverse_dynamics, inverse_kinematics, simulate)
 
 THESIS_GRID = (0.0, 0.01, 629)   # start, step, samples: 0:0.01:2*pi
+
+# What the harness can compare on a scenario (the keys of `Scenario.compared`).
+QUANTITIES = {
+    "mass_matrix": "M at the scenario's states, every engine that provides M",
+    "torques": "inverse-dynamics rider torques Mdir, Mped, Mvue along the motion",
+    "multipliers": "the five constraint multipliers along the motion",
+    "trajectory": "all eight coordinates against time, up to the meaningful horizon",
+    "constraint_residual": "max |C| (the five constraints, evaluated by the reference) along the run",
+}
+INVERSE_QUANTITIES = ("mass_matrix", "torques", "multipliers")
+FORWARD_QUANTITIES = ("mass_matrix", "trajectory", "constraint_residual")
+
+
+@dataclass(frozen=True)
+class ExpectedDifference:
+    """A difference between two engines that is expected, and why. Strict: if the compared
+    quantity stops differing, the harness reports that as unexpected too."""
+
+    quantity: str        # e.g. "convergence order"
+    engines: str         # e.g. "exudyn-tree (disc contact) vs reference (thesis contact)"
+    expected: str        # the verdict expected, e.g. "model difference"
+    reason: str
 
 
 @dataclass(frozen=True)
@@ -43,6 +71,22 @@ class Scenario:
     baumgarte: tuple[float, float] = THESIS_BAUMGARTE
     thesis_claim: str = ""
     tags: tuple[str, ...] = field(default_factory=tuple)
+    compared: tuple[str, ...] = ()             # keys of QUANTITIES; default by kind
+    expected_differences: tuple[ExpectedDifference, ...] = ()
+
+    def __post_init__(self):
+        if not self.compared:
+            object.__setattr__(self, "compared",
+                               INVERSE_QUANTITIES if self.kind == "inverse" else FORWARD_QUANTITIES)
+        unknown = [c for c in self.compared if c not in QUANTITIES]
+        if unknown:
+            raise ValueError(f"scenario {self.name!r}: unknown compared quantity {unknown[0]!r}; "
+                             f"choose from {', '.join(QUANTITIES)}")
+
+    @property
+    def duration(self) -> float:
+        start, step, n = self.grid
+        return step * (n - 1)
 
     @property
     def t(self) -> np.ndarray:
@@ -76,7 +120,40 @@ def _stability(psid: float) -> Scenario:
                       5: "travels some metre before falling",
                       10: "places its frame in a vertical plane and stabilises"}[psid],
         tags=("stability",),
+        expected_differences=(() if psid != 10 else (ExpectedDifference(
+            "convergence order", "exudyn-tree (disc contact) vs reference (thesis contact)",
+            "model difference",
+            "the thesis's front contact (the rim point along the fork's -z axis) and the true "
+            "lowest point of the disc differ as soon as lean and steer are both non-zero (here "
+            "from t = 0): the error of an engine with the true contact cannot shrink with its "
+            "step"),)),
     )
+
+
+# The IFToMM multibody benchmark "uncontrolled bicycle" (iftomm-multibody.org, problem
+# Uncontrolled_bicycle): the Meijaard et al. (2007) benchmark bicycle released upright and
+# straight at forward speed v with an initial roll rate, no torques, no drag. Duration and
+# output as in the reference implementation distributed with Exudyn
+# (Examples/bicycleIftommBenchmark.py): tEnd = 5 s, output every 0.01 s.
+IFTOMM_BICYCLE_GRID = (0.0, 0.01, 501)   # 0:0.01:5 s
+BENCHMARK_R_REAR = 0.3                   # m: Table 1's rR (rear wheel radius of `benchmark`)
+
+
+def _iftomm_bicycle(v: float, roll_rate: float, claim: str) -> Scenario:
+    """IFToMM uncontrolled-bicycle manoeuvre on model 'benchmark': upright (theta = gamma = 0),
+    steer rate 0, roll rate ``roll_rate`` (rad/s, positive = leaning to the right, as the
+    benchmark's phi), rear wheel at psi_dot = v / rR > 0 (so xc grows: forward at v m/s)."""
+    return Scenario(
+        name=f"benchmark-v{v:g}",
+        description=(f"IFToMM uncontrolled bicycle (Meijaard et al. 2007 benchmark): upright "
+                     f"at {v:g} m/s, roll rate {roll_rate:g} rad/s, no torques, 5 s"),
+        kind="forward", model="benchmark", grid=IFTOMM_BICYCLE_GRID,
+        # beta = -lambda = -pi/10 is the upright frame pitch of the benchmark (steering axis =
+        # frame z): the projection re-solves it from [rD]_z = 0 and reports the correction
+        q0=(0, 0, 0, 0, 0, -np.pi / 10, 0, 0),
+        dq_ind0=(float(roll_rate), float(v) / BENCHMARK_R_REAR, 0.0),
+        torques=(0.0, 0.0, 0.0), constraints="projection", thesis_claim=claim,
+        tags=("benchmark", "iftomm"))
 
 
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
@@ -93,6 +170,16 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
              thesis_claim="motion identical to the zigzag inverse kinematics; constraint error "
                           "below 2e-3"),
     *(_stability(v) for v in (0, 1, 5, 10)),
+    Scenario("check-forward", "the check scenario run forward: upright straight rolling at "
+             "1.6 m/s under the check's constant pedal torque (its inverse dynamics), the "
+             "forward counterpart of the check's claim", "forward",
+             q0=(0,) * 8, dq_ind0=(0.0, 5.0, 0.0), torques="check",
+             thesis_claim="the constant pedal torque balances the drag: speed and heading stay "
+                          "constant", tags=("check",)),
+    _iftomm_bicycle(4.0, 0.05, "below the weave speed (4.292 m/s): the weave oscillation grows"),
+    _iftomm_bicycle(4.6, 0.5, "in the self-stable range (4.292-6.024 m/s): the weave decays"),
+    _iftomm_bicycle(8.0, 0.05, "above the capsize speed (6.024 m/s): the weave decays, then the "
+                               "bicycle leans over slowly (capsize)"),
 )}
 
 

@@ -23,7 +23,8 @@ COORDINATES = ["xc", "yc", "phi", "theta", "psi", "beta", "gamma", "eps"]   # th
 STATE_COLUMNS = (["t"] + COORDINATES + [f"d_{n}" for n in COORDINATES]
                  + [f"dd_{n}" for n in COORDINATES])
 SCENARIO_NAMES = ["check", "zigzag", "replay", "stability-psid0", "stability-psid1",
-                  "stability-psid5", "stability-psid10"]
+                  "stability-psid5", "stability-psid10", "check-forward",
+                  "benchmark-v4", "benchmark-v4.6", "benchmark-v8"]
 THESIS_DPHI0 = -0.035520618556701   # the thesis's forward dq0[3] (listing, 15 decimals)
 
 
@@ -140,7 +141,7 @@ def test_usage_errors_exit_2_with_one_line(tmp_path, capsys, case):
 # --------------------------------------------------------------------------------------------
 # listings
 # --------------------------------------------------------------------------------------------
-def test_scenarios_lists_all_seven(capsys):
+def test_scenarios_lists_every_scenario(capsys):
     code, stdout, err = run(capsys, "scenarios")
     assert code == 0, err
     first_words = [ln.split()[0] for ln in stdout.strip().splitlines()]
@@ -154,7 +155,8 @@ def test_models_lists_thesis_and_disc(capsys):
     code, stdout, err = run(capsys, "models")
     assert code == 0, err
     rows = {ln.split()[0]: ln for ln in stdout.strip().splitlines()}
-    assert {"thesis", "thesis-disc"} <= set(rows)
+    assert {"thesis", "thesis-disc", "benchmark"} <= set(rows)
+    assert "contact=disc" in rows["benchmark"]
     assert "contact=thesis" in rows["thesis"]
     assert "contact=disc" in rows["thesis-disc"]
 

@@ -1,11 +1,16 @@
-"""The report of `bicycle-xval run`: its machine-readable summary, the engine sections, the
-convergence verdicts, and determinism."""
+"""The report of `bicycle-xval run`: the summary.json contract, the engine runs, the thesis's
+claims per engine, the self-contained HTML, exit codes and determinism."""
 
 import json
+import re
 
 import pytest
 
 from comparisons.cli import main
+from comparisons.html import markdown_to_html
+from comparisons.runner import summary_table
+
+VERDICTS = {"reproduced", "not reproduced", "partly", "not assessed"}
 
 
 @pytest.fixture(scope="module")
@@ -15,54 +20,142 @@ def quick_report(tmp_path_factory):
     return out, json.loads((out / "summary.json").read_text())
 
 
-def test_summary_comparisons_carry_the_contract_keys(quick_report):
+def test_summary_carries_the_contract_keys(quick_report):
     _, summary = quick_report
     assert summary["engines"] == ["reference", "pinocchio", "exudyn"]
+    assert {"comparisons", "claims", "faults", "environment"} <= set(summary)
     assert summary["comparisons"], "no engine comparison in the summary"
     for c in summary["comparisons"]:
         assert {"quantity", "scenario", "engines", "max_error", "tolerance", "passed"} <= set(c)
+    for c in summary["claims"]:
+        assert {"claim", "engine", "verdict", "evidence"} <= set(c) and c["verdict"] in VERDICTS
+    for f in summary["faults"]:
+        assert {"fault", "detected", "localized_to"} <= set(f)
+    env = summary["environment"]
+    assert {"packages", "machine", "solvers", "steps"} <= set(env)
+    assert "pin" in env["packages"] and "exudyn" in env["packages"]
 
 
 def test_pinocchio_terms_all_pass_and_name_their_worst_entry(quick_report):
     _, summary = quick_report
-    terms = [c for c in summary["comparisons"] if c["engines"] == ["reference", "pinocchio"]]
+    terms = [c for c in summary["comparisons"] if c["engines"] == ["reference", "pinocchio"]
+             and c["scenario"].startswith("random-states")]
     assert len(terms) == 14  # 7 quantities x 2 contact models
     assert all(c["passed"] and c["max_error"] <= c["tolerance"] for c in terms)
     assert all(c["localized_to"] for c in terms)
 
 
-def test_convergence_verdicts_separate_integrator_from_model(quick_report):
-    """Matched models converge at order ~2; disc contact against the thesis contact is the
-    declared model difference (expected, so it passes)."""
+def test_every_engine_runs_every_scenario_it_can(quick_report):
+    """Inverse scenarios on the reference and Pinocchio, forward ones on all three; Exudyn's
+    inverse runs are recorded as not run (it has no inverse dynamics), not dropped."""
     _, summary = quick_report
-    conv = {tuple(c["engines"]) + (c["model"],): c for c in summary["comparisons"]
-            if c["quantity"] == "convergence order"}
-    tree = conv[("reference", "exudyn-tree-disc", "thesis-disc")]
-    assert tree["verdict"] == "converges" and 1.5 <= tree["order"] <= 2.5
-    diff = conv[("reference", "exudyn-tree-disc", "thesis")]
-    assert diff["verdict"] == "model difference" and diff["expected"] == "model difference"
-    assert diff["passed"] is True
+    runs = {(r["engine"], r["scenario"]): r["status"] for r in summary["engine_runs"]}
+    for sc in ("check", "zigzag"):
+        assert runs[("reference", sc)] == runs[("pinocchio", sc)] == "completed"
+        assert runs[("exudyn-tree", sc)] == "not run"
+    assert all(runs[(e, "stability-psid10")] in ("fell", "completed")
+               for e in ("reference", "pinocchio", "exudyn-tree"))
 
 
-def test_report_links_every_figure_it_wrote(quick_report):
+def test_inverse_dynamics_torques_and_multipliers_compared_per_engine(quick_report):
+    _, summary = quick_report
+    got = {(c["quantity"], c["scenario"]) for c in summary["comparisons"]
+           if c["engines"] == ["reference", "pinocchio"]}
+    assert {("torques", "zigzag"), ("multipliers", "zigzag"), ("torques", "check"),
+            ("multipliers", "check"), ("mass_matrix", "zigzag")} <= got
+
+
+def test_check_claim_holds_on_the_engines_with_inverse_dynamics(quick_report):
+    """The analytic result Mped = cv (R psi_dot)^2 R (thesis 5.3) is exact: every engine with
+    inverse dynamics must reproduce it."""
+    _, summary = quick_report
+    verdict = {c["engine"]: c["verdict"] for c in summary["claims"]
+               if c["claim_id"] == "check-pedal-torque"}
+    assert verdict["reference"] == verdict["pinocchio"] == "reproduced"
+
+
+def test_faults_are_detected_and_localized(quick_report):
+    _, summary = quick_report
+    ids = {f["fault"] for f in summary["faults"]}
+    assert {"I3xz-sign", "I2xx-I2yy-swapped", "com-offset-1mm", "z3-0.39647",
+            "gyroscopic-dropped", "contact-switched"} <= ids
+    pin = [f for f in summary["faults"] if f["engine"] == "pinocchio"]
+    assert len(pin) == 6 and all(f["detected"] and f["correct"] for f in pin)
+    # Exudyn's tree gives M and the generalized forces only: the contact switch changes just
+    # D and dD dq, so it must be reported as not observable there, not as caught or missed
+    exu = {f["fault"]: f for f in summary["faults"] if f["engine"] == "exudyn"}
+    assert exu["contact-switched"]["verdict"] == "not observable"
+    assert all(f["verdict"] == "localized" for k, f in exu.items() if k != "contact-switched")
+
+
+def test_report_starts_with_the_summary_table_and_links_every_figure(quick_report):
     out, _ = quick_report
     text = (out / "report.md").read_text()
+    headings = re.findall(r"^## (.*)$", text, flags=re.M)
+    assert headings[0].startswith("Summary")
     for png in (out / "figures").glob("*.png"):
         assert f"figures/{png.name}" in text
     assert "Initial state" in text and "beta corrected by" in text
 
 
-def test_same_inputs_give_the_same_numbers(quick_report, tmp_path):
-    """Determinism: a second run of the reference and Pinocchio stages gives identical numbers."""
-    _, first = quick_report
-    assert main(["run", "--quick", "--engines", "reference,pinocchio", "--out", str(tmp_path)]) == 0
-    second = json.loads((tmp_path / "summary.json").read_text())
-    pick = lambda s: [c for c in s["comparisons"] if "pinocchio" in c["engines"]]  # noqa: E731
-    assert pick(first) == pick(second)
-    assert first["checks"] == second["checks"] and first["scenarios"] == second["scenarios"]
+def test_html_is_self_contained(quick_report):
+    out, _ = quick_report
+    html = (out / "report.html").read_text()
+    srcs = re.findall(r'src="([^"]+)"', html)
+    assert srcs and all(s.startswith("data:image/png;base64,") for s in srcs)
+    assert len(srcs) == len(list((out / "figures").glob("*.png")))
+    assert "<table>" in html and "<link" not in html
 
 
-def test_unknown_engine_is_a_usage_error(tmp_path, capsys):
-    assert main(["run", "--engines", "reference,bullet", "--out", str(tmp_path)]) == 2
+def test_same_inputs_give_the_same_report(quick_report, tmp_path):
+    """Determinism: a second identical run writes byte-identical summary.json and report.md;
+    run times live only in timings.json."""
+    out, _ = quick_report
+    assert main(["run", "--quick", "--out", str(tmp_path)]) == 0
+    for name in ("summary.json", "report.md"):
+        assert (out / name).read_text() == (tmp_path / name).read_text(), name
+    assert "seconds" not in (out / "summary.json").read_text()
+
+
+def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
+    """A tolerance is a claim: tighten the mass matrix's below round-off and the run must fail."""
+    from comparisons.tolerances import TOLERANCES_FILE
+    tight = tmp_path / "tight.toml"
+    tight.write_text(TOLERANCES_FILE.read_text().replace(
+        "[mass_matrix]\ntolerance = 1e-12", "[mass_matrix]\ntolerance = 1e-19"))
+    out = tmp_path / "r"
+    assert main(["run", "--scenarios", "zigzag", "--engines", "reference,pinocchio",
+                 "--tolerances", str(tight), "--out", str(out)]) == 1
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["passed"] is False
+    assert any(c["quantity"] == "mass_matrix" and c["passed"] is False for c in summary["comparisons"])
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--engines", "reference,bullet"], "unknown engine 'bullet'"),
+    (["--scenarios", "zigzag,nope"], "unknown scenario 'nope'"),
+    (["--jobs", "0"], "--jobs must be between 1 and 64"),
+    (["--tolerances", "/nonexistent.toml"], "--tolerances: no file"),
+])
+def test_usage_errors_exit_2_with_one_line(tmp_path, capsys, args, needle):
+    assert main(["run", *args, "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "unknown engine 'bullet'" in err[0]
+    assert len(err) == 1 and needle in err[0]
+
+
+def test_summary_table_groups_by_quantity_and_pair():
+    comps = [
+        {"quantity": "M", "scenario": "a", "engines": ["r", "p"], "max_error": 1e-15, "tolerance": 1e-12, "passed": True},
+        {"quantity": "M", "scenario": "b", "engines": ["r", "p"], "max_error": 2e-12, "tolerance": 1e-12, "passed": False},
+        {"quantity": "M", "scenario": "a", "engines": ["r", "e"], "max_error": 3e-3, "tolerance": None, "passed": None},
+    ]
+    rows = {(r["quantity"], r["engines"]): r for r in summary_table(comps)}
+    assert rows[("M", "r vs p")]["max_error"] == 2e-12 and rows[("M", "r vs p")]["verdict"] == "FAIL (1 of 2)"
+    assert rows[("M", "r vs e")]["verdict"] == "reported"
+
+
+def test_markdown_to_html_tables_headings_and_escaping(tmp_path):
+    md = "# T\n\ntext with `code` and a <tag>\n\n| a | b |\n|---|---|\n| x \\| y | pass |\n"
+    html = markdown_to_html(md, tmp_path)
+    assert '<h1 id="t">T</h1>' in html and "&lt;tag&gt;" in html and "<code>code</code>" in html
+    assert "<td>x | y</td>" in html and '<td class="pass">pass</td>' in html

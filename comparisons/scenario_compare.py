@@ -1,0 +1,152 @@
+"""Engine runs of one scenario against the reference's: what the registry says is compared.
+
+* inverse scenarios: rider torques and multipliers along the motion, M at its states;
+* forward scenarios: all eight coordinates up to the meaningful horizon (with the coordinate
+  that diverges first, and when), the constraint residual of every engine's run (evaluated by
+  the reference model, so every engine is measured by the same yardstick), M at the
+  reference run's states.
+
+Every comparison is a plain dict (the `comparisons` entries of summary.json): quantity,
+scenario, model, engines, max_error, tolerance, passed, localized_to, plus notes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from reference_model import CONSTRAINT_NAMES, COORDINATES, TORQUE_NAMES
+
+from .convergence import HORIZON_THRESHOLD, Horizon, reference_horizon
+from .scenario_runs import SETUPS, Run
+from .terms import States, compare_term
+from .tolerances import Tolerance
+
+ALL = tuple(COORDINATES)
+
+
+@dataclass(frozen=True)
+class TrajectoryError:
+    """|engine - reference| for each coordinate on the common grid up to a horizon."""
+
+    t: np.ndarray
+    errors: np.ndarray          # (N, 8)
+    first: str                  # 'theta at 0.89 s' or '-' if nothing passes the threshold
+    worst: float
+    worst_coordinate: str
+
+
+def trajectory_error(ref: Run, other: Run, horizon: float, threshold: float = HORIZON_THRESHOLD
+                     ) -> TrajectoryError:
+    """Errors of all eight coordinates on the grid times both runs share, up to ``horizon``."""
+    keys_r = np.round(ref.t / 1e-6).astype(np.int64)
+    keys_o = np.round(other.t / 1e-6).astype(np.int64)
+    common, ia, ib = np.intersect1d(keys_r, keys_o, return_indices=True)
+    keep = ref.t[ia] <= horizon + 1e-9
+    ia, ib = ia[keep], ib[keep]
+    err = np.abs(other.q[ib] - ref.q[ia])
+    t = ref.t[ia]
+    if err.size == 0:
+        return TrajectoryError(t, err.reshape(0, 8), "-", 0.0, "-")
+    over = np.flatnonzero(err.max(axis=1) > threshold)
+    first = "-"
+    if over.size:
+        k = int(over[0])
+        first = f"{COORDINATES[int(np.argmax(err[k]))]} at {t[k]:.2f} s"
+    j = int(np.argmax(err.max(axis=0)))
+    return TrajectoryError(t, err, first, float(err.max()), COORDINATES[j])
+
+
+def constraint_series(model, run: Run) -> np.ndarray:
+    """|C| (N, 5) of a run's states, evaluated by the reference model."""
+    if run.t.size == 0:
+        return np.zeros((0, 5))
+    return np.abs(model.constraint_residual(run.q, run.dq))
+
+
+def _entry(M_diff: np.ndarray) -> str:
+    i, j = np.unravel_index(int(np.argmax(M_diff)), M_diff.shape)
+    return f"M[{COORDINATES[i]}, {COORDINATES[j]}]"
+
+
+def compare_inverse(ref: Run, other: Run, tols: dict[str, Tolerance]) -> list[dict]:
+    """Torques and multipliers of ``other`` against the reference, sample by sample."""
+    out = []
+    for quantity, a, b, names in (("torques", ref.T, other.T, TORQUE_NAMES),
+                                  ("multipliers", ref.lam, other.lam,
+                                   [f"lambda[{c}]" for c in CONSTRAINT_NAMES])):
+        tol = tols[quantity]
+        diff = np.abs(b - a)
+        scale = tol.normalizer(a)
+        k, i = np.unravel_index(int(np.argmax(diff)), diff.shape)
+        err = float(diff.max()) / scale
+        out.append({
+            "quantity": quantity, "scenario": ref.scenario, "model": ref.model,
+            "engines": [ref.engine, other.engine], "max_error": err, "max_abs_error": float(diff.max()),
+            "tolerance": tol.tolerance, "passed": bool(err <= tol.tolerance),
+            "localized_to": f"{names[i]} at t = {ref.t[k]:.2f} s",
+            "note": f"over {len(ref.t)} samples; error relative to {scale:.3g} ({tol.scale})"})
+    return out
+
+
+def compare_mass_matrix(scenario: str, model, states_q: np.ndarray, engines, tols) -> list[dict]:
+    """M of every engine that provides it at the given states, against the reference."""
+    from engines import load_engine
+    ref = load_engine("reference", model)
+    n = len(states_q)
+    states = States(states_q, np.zeros_like(states_q), np.zeros_like(states_q), np.zeros((n, 3)))
+    out = []
+    for label in engines:
+        if label == "reference":
+            continue
+        eng = SETUPS[label].build(model)
+        if not eng.supports("mass_matrix"):
+            continue
+        r = compare_term("mass_matrix", ref, eng, states, tols["mass_matrix"])
+        out.append({"quantity": "mass_matrix", "scenario": scenario, "model": model.name,
+                    "engines": ["reference", label], "max_error": r.max_error,
+                    "max_abs_error": r.max_abs_error, "tolerance": r.tolerance,
+                    "passed": r.passed, "localized_to": f"{r.worst_entry} at state {r.worst_state}",
+                    "note": f"at the reference's {n} states of the scenario"})
+    return out
+
+
+def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols) -> tuple[list[dict], TrajectoryError]:
+    """Trajectory (8 coordinates, up to the horizon) of ``other`` against the reference."""
+    te = trajectory_error(ref, other, horizon.t)
+    same_solver = other.engine == "pinocchio"
+    tol = tols["trajectory"]
+    comp = {
+        "quantity": "trajectory", "scenario": ref.scenario, "model": ref.model,
+        "engines": [ref.engine, other.engine], "max_error": te.worst,
+        "tolerance": tol.tolerance if same_solver else None,
+        "passed": bool(te.worst <= tol.tolerance) if same_solver else None,
+        "localized_to": f"first past 1e-6: {te.first}; largest: {te.worst_coordinate}",
+        "horizon": horizon.t, "horizon_reason": horizon.reason,
+        "note": ("same integrator and formulation as the reference: judged" if same_solver else
+                 "a fixed-step integrator: reported here, judged by its convergence order"),
+    }
+    return [comp], te
+
+
+def compare_constraints(model, run: Run, tols) -> dict:
+    """The constraint residual of one engine's run, measured by the reference model."""
+    C = constraint_series(model, run)
+    tol = tols["constraint_residual"]
+    if C.size == 0:
+        return {"quantity": "constraint_residual", "scenario": run.scenario, "model": run.model,
+                "engines": [run.engine], "max_error": None, "tolerance": tol.tolerance,
+                "passed": None, "localized_to": "-", "note": f"no samples ({run.status})"}
+    k, i = np.unravel_index(int(np.argmax(C)), C.shape)
+    err = float(C.max())
+    return {"quantity": "constraint_residual", "scenario": run.scenario, "model": run.model,
+            "engines": [run.engine], "max_error": err, "tolerance": tol.tolerance,
+            "passed": bool(err <= tol.tolerance),
+            "localized_to": f"C[{CONSTRAINT_NAMES[i]}] at t = {run.t[k]:.2f} s",
+            "note": f"whole run to {run.t_end:.3f} s ({run.status})"}
+
+
+def horizon_for(model, scenario) -> Horizon:
+    """The meaningful horizon of a forward scenario (two reference runs 1e-9 rad/s apart)."""
+    return reference_horizon(model, scenario)
