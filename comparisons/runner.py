@@ -287,6 +287,7 @@ def run_report(out: Path, scenarios: str | None = None, quick: bool = False,
         timings["fault injection"] = time.perf_counter() - t0
 
     comparisons = scen_comps + [c for sec in sections for c in sec.comparisons]
+    localization = localization_stage(comparisons)
     failed = (any(c["passed"] is False for c in checks) or any(r[2] == "failed" for r in rows)
               or any(c["passed"] is False for c in comparisons)
               or any(f["verdict"] not in ("localized", "not observable") for f in faults))
@@ -313,7 +314,8 @@ def run_report(out: Path, scenarios: str | None = None, quick: bool = False,
         {"total_seconds": timings.pop("total"), "per_stage_seconds": timings,
          "engine_run_seconds": {f"{name} on {lab}": r.seconds for (lab, name), r in sorted(runs.items())}},
         indent=1) + "\n")
-    md = _markdown(summary, rows, corrections, scen_lines, scen_figs, sections, fault_lines, quick)
+    md = _markdown(summary, rows, corrections, scen_lines, scen_figs, sections, fault_lines, quick,
+                   localization)
     (out / "report.md").write_text(md)
     write_html(out / "report.md")
     _progress(f"report written to {out / 'report.md'} and report.html in "
@@ -375,12 +377,41 @@ def fault_stage(engines):
     return entries, lines
 
 
+TERM_QUANTITIES = ("mass_matrix", "inverse_dynamics", "gravity", "generalized_forces",
+                   "constraint_jacobian", "constraint_bias", "forward_acceleration", "torques",
+                   "multipliers")
+
+
+def localization_stage(comparisons) -> list[str]:
+    """For every (model, engine) whose terms or inverse dynamics failed a tolerance: which
+    terms, which entries, and the parameter or structural cause (with its body) that best
+    explains the difference (`diagnose.localize`). Empty when everything agrees."""
+    from reference_model import load_model
+    from .diagnose import localize
+    from .scenario_runs import SETUPS
+    from .terms import random_states
+    pairs = sorted({(c.get("model", "thesis"), c["engines"][1]) for c in comparisons
+                    if c["passed"] is False and c["quantity"] in TERM_QUANTITIES
+                    and len(c["engines"]) == 2})
+    lines = []
+    for model_name, engine in pairs:
+        label = {"exudyn-tree": "exudyn-tree"}.get(engine, engine)
+        if label not in SETUPS:
+            continue
+        model = load_model(model_name)
+        loc = localize(model, random_states(16, seed=11), [SETUPS[label].build(model)])
+        lines += [f"### {model_name}: reference vs {engine}", ""]
+        lines += [f"- {_md(ln.strip())}" for ln in loc.describe().splitlines() if ln.strip()] + [""]
+    return lines
+
+
 def _unobservable(faults) -> str:
     n = sum(f["verdict"] == "not observable" for f in faults)
     return f" ({n} not observable by the engine)" if n else ""
 
 
-def _markdown(summary, rows, corrections, scen_lines, scen_figs, sections, fault_lines, quick) -> str:
+def _markdown(summary, rows, corrections, scen_lines, scen_figs, sections, fault_lines, quick,
+              localization) -> str:
     n_comp = len(summary["comparisons"])
     n_fail = sum(c["passed"] is False for c in summary["comparisons"])
     n_judged = sum(c["passed"] is not None for c in summary["comparisons"])
@@ -407,6 +438,12 @@ def _markdown(summary, rows, corrections, scen_lines, scen_figs, sections, fault
     L += ["", "Errors are relative to the scale each tolerance names (absolute for trajectories "
           "and constraint residuals, in rad, m or m/s); 'reported' rows are judged elsewhere "
           "(Exudyn's trajectories by its convergence order).", ""]
+    if localization:
+        L += ["## Where the engines disagree", "",
+              "Each failing term comparison localized: the terms that differ, their worst entries, "
+              "and the single parameter or structural cause (with its body) that best explains the "
+              "difference, by least squares over the sensitivities of all 30 parameters.", ""]
+        L += localization
     L += ["## The thesis's claims, engine by engine", "",
           "| claim | engine | verdict | evidence |", "|---|---|---|---|"]
     L += [f"| {_md(c['claim'])} | {c['engine']} | {c['verdict']} | {_md(c['evidence'])} |"

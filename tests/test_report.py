@@ -93,6 +93,7 @@ def test_report_starts_with_the_summary_table_and_links_every_figure(quick_repor
     text = (out / "report.md").read_text()
     headings = re.findall(r"^## (.*)$", text, flags=re.M)
     assert headings[0].startswith("Summary")
+    assert "Where the engines disagree" not in text   # nothing to localize when all agree
     for png in (out / "figures").glob("*.png"):
         assert f"figures/{png.name}" in text
     assert "Initial state" in text and "beta corrected by" in text
@@ -129,6 +130,7 @@ def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["passed"] is False
     assert any(c["quantity"] == "mass_matrix" and c["passed"] is False for c in summary["comparisons"])
+    assert "## Where the engines disagree" in (out / "report.md").read_text()
 
 
 @pytest.mark.parametrize("args, needle", [
