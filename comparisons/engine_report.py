@@ -256,4 +256,8 @@ def run_engine_stage(out: Path, engines, quick: bool, progress) -> list[Section]
         progress("engines: Exudyn convergence ...")
         sections.append(exudyn_convergence(out, quick, progress))
         sections.append(energy_section(progress))
+    if "pinocchio" in engines and "exudyn" in engines:
+        from .benchmark_report import benchmark_section
+        progress("benchmark bicycle (Meijaard et al. 2007): eigenvalues, engines, IFToMM manoeuvres ...")
+        sections.append(benchmark_section(out, quick, progress))
     return sections

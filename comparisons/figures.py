@@ -87,13 +87,15 @@ def trajectory_overlay(out: Path, scenario: str, runs: dict, errors: dict, horiz
     return _save(fig, out, f"{scenario}_trajectories.png")
 
 
-def constraint_residuals(out: Path, model, forward: dict[str, dict]) -> str:
-    """max |C| against time, one panel per forward scenario, one line per engine."""
+def constraint_residuals(out: Path, models: dict, forward: dict[str, dict]) -> str:
+    """max |C| against time, one panel per forward scenario (its model in ``models``), one line
+    per engine."""
     plt = _plt()
     names = list(forward)
     fig, axes = plt.subplots(len(names), 1, figsize=(7.5, 1.9 * len(names) + 0.6), sharex=True,
                              squeeze=False)
     for ax, name in zip(axes[:, 0], names):
+        model = models[name]
         for eng, r in forward[name].items():
             if r.t.size:
                 C = np.abs(model.constraint_residual(r.q, r.dq)).max(axis=1)

@@ -154,7 +154,7 @@ def scenario_stage(out: Path, names, labels, runs, progress):
 
     tols = load_tolerances()
     comps, lines, figs = [], [], []
-    forward_runs, stability = {}, {}
+    forward_runs, stability, models = {}, {}, {}
     for name in names:
         sc = get_scenario(name)
         model = load_model(sc.model)
@@ -182,12 +182,12 @@ def scenario_stage(out: Path, names, labels, runs, progress):
             comps += c
             errors[lab] = te
         figs.append(figures.trajectory_overlay(out, name, here, errors, hor.t))
-        forward_runs[name] = here
+        forward_runs[name], models[name] = here, model
         if "stability" in sc.tags:
             for lab, r in here.items():
                 stability.setdefault(lab, {})[name] = r
     if forward_runs:
-        figs.append(figures.constraint_residuals(out, load_model("thesis"), forward_runs))
+        figs.append(figures.constraint_residuals(out, models, forward_runs))
     if stability:
         figs.append(figures.stability_study(out, stability))
     zig = runs.get(("reference", "zigzag"))

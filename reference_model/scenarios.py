@@ -133,8 +133,8 @@ def _stability(psid: float) -> Scenario:
 # The IFToMM multibody benchmark "uncontrolled bicycle" (iftomm-multibody.org, problem
 # Uncontrolled_bicycle): the Meijaard et al. (2007) benchmark bicycle released upright and
 # straight at forward speed v with an initial roll rate, no torques, no drag. Duration and
-# output as in the reference implementation distributed with Exudyn
-# (Examples/bicycleIftommBenchmark.py): tEnd = 5 s, output every 0.01 s.
+# output as in Exudyn's implementation of the problem (Examples/bicycleIftommBenchmark.py,
+# current revision: tEnd = 5 s, sensors every 0.01 s; an older revision ran 20 s).
 IFTOMM_BICYCLE_GRID = (0.0, 0.01, 501)   # 0:0.01:5 s
 BENCHMARK_R_REAR = 0.3                   # m: Table 1's rR (rear wheel radius of `benchmark`)
 
