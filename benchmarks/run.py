@@ -438,6 +438,33 @@ def bench_forward(model, repeat: int) -> list[Row]:
     return rows
 
 
+def bench_linearization(repeat: int) -> list[Row]:
+    """The benchmark bicycle's eigenvalues over the CLI's default grid (1001 speeds) and its
+    weave and capsize speeds, warm (the generated numpy code loaded once)."""
+    from reference_model import load_model
+    from reference_model.linearize import capsize_speed, eigenvalues, weave_speed
+    bench = load_model("benchmark")
+    speeds = 0.01 * np.arange(1001)
+    eigenvalues(bench, 1.0)   # load the generated code
+    wall, _ = best_wall(lambda: eigenvalues(bench, speeds), repeat)
+    crit, _ = best_wall(lambda: (weave_speed(bench), capsize_speed(bench)), repeat)
+    return [Row("eigenvalues_1001", "benchmark eigenvalues at 1001 speeds (0:10:0.01)", wall),
+            Row("critical_speeds", "benchmark weave + capsize speeds (brentq)", crit)]
+
+
+def bench_pinocchio_forward(model, repeat: int) -> list[Row]:
+    """stability-psid10 through the same solver on Pinocchio's terms (the adapter) and on the
+    reference's generated code: what `bicycle-xval run` pays per engine run."""
+    from engines import load_engine
+    from reference_model.scenarios import SCENARIOS, run_forward
+    sc = SCENARIOS["stability-psid10"]
+    pin = load_engine("pinocchio", model)
+    w_pin, t_pin = best_wall(lambda: pin.simulate(sc), repeat)
+    w_ref, t_ref = best_wall(lambda: run_forward(model, sc), repeat)
+    return [Row("psid10_reference", f"stability-psid10 forward run, reference ({t_ref.timing['nfev']} RHS)", w_ref),
+            Row("psid10_pinocchio", f"stability-psid10 forward run, Pinocchio adapter ({t_pin.timing['nfev']} RHS)", w_pin)]
+
+
 # -- 6. Pinocchio ----------------------------------------------------------------------------
 
 def build_pinocchio(model):
@@ -655,6 +682,9 @@ def main(argv: list[str] | None = None) -> int:
     rows += bench_zigzag(model, wall_repeat)
     progress("forward runs...")
     rows += bench_forward(model, wall_repeat)
+    progress("linearization of the benchmark bicycle; Pinocchio-adapter forward run...")
+    rows += bench_linearization(wall_repeat)
+    rows += bench_pinocchio_forward(model, wall_repeat)
     rows += [Row(m.key, m.quantity, m.best) for m in pin_micro]
     rows.append(Row("import_pinocchio", "import pinocchio (in-process"
                     + (", already loaded)" if pin_already else ")"), t_pin_import))
