@@ -79,6 +79,7 @@ from .convergence import (DEFAULT_STEPS, Horizon, convergence_study, error_vs_ti
                           reference_horizon, reference_run)
 from .energy import energy_drift
 from .engine_report import Section, _md, _savefig
+from .published import MEIJAARD_CAPSIZE_SPEED, MEIJAARD_WEAVE_SPEED
 from .terms import States, compare_terms, random_states
 from .tolerances import load_tolerances
 
@@ -96,8 +97,8 @@ EXUDYN_STEP = 1e-3                 # s: divides the IFToMM output interval 0.01 
 BUILDS = ("tree", "redundant")
 QUICK_BUILDS = ("tree",)
 # Meijaard et al. (2007), section 7 / Table 2: the linearized benchmark is self-stable between
-PUBLISHED_WEAVE_SPEED = 4.29238253634111     # m/s
-PUBLISHED_CAPSIZE_SPEED = 6.02426201538837   # m/s
+PUBLISHED_WEAVE_SPEED = MEIJAARD_WEAVE_SPEED       # m/s (comparisons/published.py)
+PUBLISHED_CAPSIZE_SPEED = MEIJAARD_CAPSIZE_SPEED   # m/s
 IFTOMM_DRIFT_PERCENT = 1e-3        # %: IFToMM acceptance, 100 (Emax - Emin) / E0 < 1e-3
 ENVELOPE_FROM = 1.0                # s: castor mode (<= -12 /s) down by e^-12
 CAPSIZE_FROM = 3.0                 # s: weave at 8 m/s (-2.69 /s) down by e^-8

@@ -35,6 +35,8 @@ import pandas as pd
 import pytest
 
 from comparisons.cli import UsageError
+from comparisons.published import (MEIJAARD_CAPSIZE_SPEED, MEIJAARD_TABLE2, MEIJAARD_WEAVE_SPEED,
+                                   table2_eigenvalues)
 from comparisons.eigenvalues import (add_eigenvalues_parser, eigenvalue_figure, eigenvalue_table,
                                      parse_speeds, run_eigenvalues)
 from reference_model import ParameterError, load_model
@@ -52,21 +54,9 @@ XH, ZH, MH = "0.9", "-0.7", "4"
 IH = [["0.05892", "0", "-0.00756"], ["0", "0.06", "0"], ["-0.00756", "0", "0.00708"]]
 RF, MF, IFXX, IFYY = "0.35", "3", "0.1405", "0.28"
 
-# -- Table 2: weave re, weave im, capsize, castor (v = 0: the four real roots) -----------------
-TABLE2 = {
-    0: (5.53094371765393, 3.13164324790656, -3.13164324790656, -5.53094371765393),
-    1: (3.52696170990070, 0.80774027519930, -3.13423125066578, -7.11008014637442),
-    2: (2.68234517512745, 1.68066296590675, -3.07158645641514, -8.67387984831735),
-    3: (1.70675605663975, 2.31582447384325, -2.63366137253667, -10.35101467245920),
-    4: (0.41325331521125, 3.07910818603206, -1.42944427361326, -12.15861426576450),
-    5: (-0.77534188219585, 4.46486771378823, -0.32286642900409, -14.07838969279820),
-    6: (-1.52644486584142, 5.87673060598709, -0.00406690076970, -16.08537123098030),
-    7: (-2.13875644258362, 7.19525913329805, 0.10268170574766, -18.15788466125262),
-    8: (-2.69348683581097, 8.46037971396931, 0.14327879765713, -20.27940894394569),
-    9: (-3.21675402252485, 9.69377351531791, 0.15790184030917, -22.43788559040858),
-    10: (-3.72016840437287, 10.90681139476287, 0.16105338653172, -24.62459635017404),
-}
-WEAVE_SPEED, CAPSIZE_SPEED = 4.29238253634111, 6.02426201538837
+# -- Table 2 (typed once, from the paper, in comparisons/published.py) -------------------------
+TABLE2 = MEIJAARD_TABLE2
+WEAVE_SPEED, CAPSIZE_SPEED = MEIJAARD_WEAVE_SPEED, MEIJAARD_CAPSIZE_SPEED
 PUBLISHED = {
     "M": [[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]],
     "C1": [[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]],
@@ -76,11 +66,7 @@ PUBLISHED = {
 TOL_EIG, TOL_SPEED, TOL_MATRIX = 1e-10, 1e-9, 1e-13
 
 
-def table2_row(v: int) -> np.ndarray:
-    a, b, c, d = TABLE2[v]
-    if v == 0:
-        return np.array([a, b, c, d], dtype=complex)
-    return np.array([a + 1j * b, a - 1j * b, c, d])
+table2_row = table2_eigenvalues
 
 
 @pytest.fixture(scope="module")
