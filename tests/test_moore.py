@@ -29,7 +29,6 @@ from reference_model import load_model
 from reference_model.model import Model
 from reference_model.moore import (MOORE_COORDINATES, MooreState, from_moore, rates_from_moore,
                                    rates_to_moore, to_moore)
-from reference_model.params import PARAMETERS_DIR
 from reference_model.solvers import consistent_state
 from strategies import coords, states
 
@@ -165,19 +164,12 @@ def table1():
     return Model(table1_geometry_params(load_model("thesis").params))
 
 
-BENCHMARK_FILE = PARAMETERS_DIR / "benchmark.toml"
 
 
 @pytest.fixture(scope="module")
 def benchmark():
-    """The benchmark bicycle of issue 6 (reference_model/parameters/benchmark.toml), written by
-    another engineer; the tests using it skip while the file does not exist."""
-    if not BENCHMARK_FILE.exists():
-        pytest.skip("reference_model/parameters/benchmark.toml (issue 6) not written yet")
-    try:
-        return load_model("benchmark")
-    except Exception:                      # not yet registered as a named model
-        return load_model(BENCHMARK_FILE)
+    """The benchmark bicycle of issue 6 (reference_model/parameters/benchmark.toml)."""
+    return load_model("benchmark")
 
 
 def pick(which, request):
