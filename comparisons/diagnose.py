@@ -45,11 +45,11 @@ import numpy as np
 
 from engines import load_engine
 from engines.base import Engine
-from reference_model import CONSTRAINT_NAMES, COORDINATES, TORQUE_NAMES, Model, ParameterError
+from reference_model import Model, ParameterError
 from reference_model.params import (BODY_NAMES, CONTACT_MODELS, PARAMETER_NAMES, PARAMETER_UNITS,
                                     resolve_model)
 
-from .terms import States, TermComparison, compare_terms, random_states
+from .terms import States, TermComparison, compare_terms, entry_name, random_states
 from .tolerances import Tolerance, load_tolerances
 
 TERMS = ("M", "Qv", "Qgrav", "Qaero", "S", "D", "dD dq")
@@ -166,19 +166,6 @@ def engine_terms(engine: Engine, states: States) -> dict[str, np.ndarray]:
     if has("constraint_bias"):
         out["dD dq"] = np.asarray(engine.constraint_bias(q, dq), dtype=float)
     return {t: out[t] for t in TERMS if t in out}
-
-
-def entry_name(term: str, index: tuple[int, ...]) -> str:
-    """'M[theta, gamma]', 'Qv[psi]', 'S[gamma, Mdir]', 'D[vD_x, beta]', 'dD dq[rD_z]'."""
-    if term == "M":
-        return f"M[{COORDINATES[index[0]]}, {COORDINATES[index[1]]}]"
-    if term == "S":
-        return f"S[{COORDINATES[index[0]]}, {TORQUE_NAMES[index[1]]}]"
-    if term == "D":
-        return f"D[{CONSTRAINT_NAMES[index[0]]}, {COORDINATES[index[1]]}]"
-    if term == "dD dq":
-        return f"dD dq[{CONSTRAINT_NAMES[index[0]]}]"
-    return f"{term}[{COORDINATES[index[0]]}]"
 
 
 def _scales(term: str, ref: Mapping[str, np.ndarray], tol: Tolerance) -> np.ndarray:

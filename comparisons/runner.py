@@ -148,8 +148,9 @@ def scenario_stage(out: Path, names, labels, runs, progress):
     from reference_model import load_model
     from reference_model.scenarios import get_scenario
     from . import figures
+    from .convergence import reference_horizon
     from .scenario_compare import (compare_constraints, compare_forward, compare_inverse,
-                                   compare_mass_matrix, horizon_for)
+                                   compare_mass_matrix)
     from .tolerances import load_tolerances
 
     tols = load_tolerances()
@@ -171,7 +172,7 @@ def scenario_stage(out: Path, names, labels, runs, progress):
             figs.append(figures.torque_overlay(out, name, {k: r for k, r in here.items() if r.T is not None}))
             continue
         progress(f"  {name}: meaningful horizon (two reference runs 1e-9 rad/s apart) ...")
-        hor = horizon_for(model, sc)
+        hor = reference_horizon(model, sc)
         errors = {}
         for lab, r in here.items():
             if "constraint_residual" in sc.compared:
@@ -395,11 +396,10 @@ def localization_stage(comparisons) -> list[str]:
                     and len(c["engines"]) == 2})
     lines = []
     for model_name, engine in pairs:
-        label = {"exudyn-tree": "exudyn-tree"}.get(engine, engine)
-        if label not in SETUPS:
+        if engine not in SETUPS:
             continue
         model = load_model(model_name)
-        loc = localize(model, random_states(16, seed=11), [SETUPS[label].build(model)])
+        loc = localize(model, random_states(16, seed=11), [SETUPS[engine].build(model)])
         lines += [f"### {model_name}: reference vs {engine}", ""]
         lines += [f"- {_md(ln.strip())}" for ln in loc.describe().splitlines() if ln.strip()] + [""]
     return lines

@@ -18,13 +18,10 @@ import numpy as np
 
 from reference_model import CONSTRAINT_NAMES, COORDINATES, TORQUE_NAMES
 
-from .convergence import HORIZON_THRESHOLD, Horizon, reference_horizon
+from .convergence import HORIZON_THRESHOLD, Horizon, error_vs_time
 from .scenario_runs import SETUPS, Run
 from .terms import States, compare_term
 from .tolerances import Tolerance
-
-ALL = tuple(COORDINATES)
-
 
 @dataclass(frozen=True)
 class TrajectoryError:
@@ -39,23 +36,16 @@ class TrajectoryError:
 
 def trajectory_error(ref: Run, other: Run, horizon: float, threshold: float = HORIZON_THRESHOLD
                      ) -> TrajectoryError:
-    """Errors of all eight coordinates on the grid times both runs share, up to ``horizon``."""
-    keys_r = np.round(ref.t / 1e-6).astype(np.int64)
-    keys_o = np.round(other.t / 1e-6).astype(np.int64)
-    common, ia, ib = np.intersect1d(keys_r, keys_o, return_indices=True)
-    keep = ref.t[ia] <= horizon + 1e-9
-    ia, ib = ia[keep], ib[keep]
-    err = np.abs(other.q[ib] - ref.q[ia])
-    t = ref.t[ia]
-    if err.size == 0:
-        return TrajectoryError(t, err.reshape(0, 8), "-", 0.0, "-")
-    over = np.flatnonzero(err.max(axis=1) > threshold)
+    """Errors of all eight coordinates on the output-grid times both runs reached (event rows
+    off the grid excluded), up to ``horizon`` (`convergence.error_vs_time`)."""
+    err = error_vs_time(ref, other, coords=COORDINATES, horizon=horizon)
+    t, e = err["t"], np.stack([err[c] for c in COORDINATES], axis=1)
+    over = np.flatnonzero(e.max(axis=1) > threshold)
     first = "-"
     if over.size:
         k = int(over[0])
-        first = f"{COORDINATES[int(np.argmax(err[k]))]} at {t[k]:.2f} s"
-    j = int(np.argmax(err.max(axis=0)))
-    return TrajectoryError(t, err, first, float(err.max()), COORDINATES[j])
+        first = f"{COORDINATES[int(np.argmax(e[k]))]} at {t[k]:.2f} s"
+    return TrajectoryError(t, e, first, float(e.max()), COORDINATES[int(np.argmax(e.max(axis=0)))])
 
 
 def constraint_series(model, run: Run) -> np.ndarray:
@@ -63,11 +53,6 @@ def constraint_series(model, run: Run) -> np.ndarray:
     if run.t.size == 0:
         return np.zeros((0, 5))
     return np.abs(model.constraint_residual(run.q, run.dq))
-
-
-def _entry(M_diff: np.ndarray) -> str:
-    i, j = np.unravel_index(int(np.argmax(M_diff)), M_diff.shape)
-    return f"M[{COORDINATES[i]}, {COORDINATES[j]}]"
 
 
 def compare_inverse(ref: Run, other: Run, tols: dict[str, Tolerance]) -> list[dict]:
@@ -145,8 +130,3 @@ def compare_constraints(model, run: Run, tols) -> dict:
             "passed": bool(err <= tol.tolerance),
             "localized_to": f"C[{CONSTRAINT_NAMES[i]}] at t = {run.t[k]:.2f} s",
             "note": f"whole run to {run.t_end:.3f} s ({run.status})"}
-
-
-def horizon_for(model, scenario) -> Horizon:
-    """The meaningful horizon of a forward scenario (two reference runs 1e-9 rad/s apart)."""
-    return reference_horizon(model, scenario)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from engines.base import Engine
-from reference_model import CONSTRAINT_NAMES, COORDINATES
+from reference_model import CONSTRAINT_NAMES, COORDINATES, TORQUE_NAMES
 
 from .tolerances import Tolerance, load_tolerances
 
@@ -66,15 +66,26 @@ class TermComparison:
                 f"at {self.worst_entry} of state {self.worst_state} (|diff| {self.max_abs_error:.2e})")
 
 
-def _entry_name(quantity: str, index: tuple[int, ...]) -> str:
-    sym = SYMBOL[quantity] if quantity != "inverse_dynamics" else "tau"
-    if quantity == "mass_matrix":
+TERM = {"mass_matrix": "M", "inverse_dynamics": "tau", "gravity": "Qgrav",
+        "generalized_forces": "Qv", "constraint_jacobian": "D", "constraint_bias": "dD dq",
+        "forward_acceleration": "ddq"}   # the name an entry of each quantity is printed with
+
+
+def entry_name(term: str, index: tuple[int, ...]) -> str:
+    """'M[theta, gamma]', 'Qv[psi]', 'S[gamma, Mdir]', 'D[vD_x, beta]', 'dD dq[rD_z]'."""
+    if term == "M":
         return f"M[{COORDINATES[index[0]]}, {COORDINATES[index[1]]}]"
-    if quantity == "constraint_jacobian":
+    if term == "S":
+        return f"S[{COORDINATES[index[0]]}, {TORQUE_NAMES[index[1]]}]"
+    if term == "D":
         return f"D[{CONSTRAINT_NAMES[index[0]]}, {COORDINATES[index[1]]}]"
-    if quantity == "constraint_bias":
+    if term == "dD dq":
         return f"dD dq[{CONSTRAINT_NAMES[index[0]]}]"
-    return f"{sym.split()[0] if quantity == 'generalized_forces' else sym}[{COORDINATES[index[0]]}]"
+    return f"{term}[{COORDINATES[index[0]]}]"
+
+
+def _entry_name(quantity: str, index: tuple[int, ...]) -> str:
+    return entry_name(TERM[quantity], index)
 
 
 def _evaluate(engine: Engine, quantity: str, s: States) -> np.ndarray:
