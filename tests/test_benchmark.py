@@ -35,10 +35,11 @@ import pandas as pd
 import pytest
 
 from comparisons.cli import UsageError
-from comparisons.published import (MEIJAARD_CAPSIZE_SPEED, MEIJAARD_TABLE2, MEIJAARD_WEAVE_SPEED,
+from comparisons.judgments.published import (MEIJAARD_CAPSIZE_SPEED, MEIJAARD_TABLE2, MEIJAARD_WEAVE_SPEED,
                                    table2_eigenvalues)
-from comparisons.eigenvalues import (add_eigenvalues_parser, eigenvalue_figure, eigenvalue_table,
-                                     parse_speeds, run_eigenvalues)
+from comparisons.cli.eigenvalues import add_eigenvalues_parser, parse_speeds, run_eigenvalues
+from comparisons.judgments.eigenvalues import eigenvalue_curves, eigenvalue_table
+from comparisons.report.figures import save_figure
 from reference_model import ParameterError, load_model
 from reference_model.benchmark import reference_parameters
 from reference_model.linearize import (LinearizationError, eigenvalues, linearize,
@@ -308,7 +309,8 @@ def test_run_eigenvalues_writes_the_table(tmp_path, capsys):
 def test_eigenvalue_table_and_figure_functions(bench, tmp_path):
     frame = eigenvalue_table(bench, [5.0])
     assert frame.shape == (1, 10)
-    path = eigenvalue_figure(bench, np.linspace(0, 10, 201), tmp_path / "sub" / "e.png")
+    path = save_figure("eigenvalues", eigenvalue_curves(bench, np.linspace(0, 10, 201)),
+                       tmp_path / "sub" / "e.png")
     assert path.stat().st_size > 1000
 
 

@@ -16,14 +16,16 @@ The manoeuvres are the IFToMM "uncontrolled bicycle" (scenarios benchmark-v4, -v
 import numpy as np
 import pytest
 
-from comparisons.benchmark_report import (MANOEUVRES, benchmark_section, capsize_measure,
-                                          identify_eigenvalues, judge_outcome,
-                                          roll_rate_envelope, run_manoeuvres, upright_state,
-                                          with_roll_rate)
-from comparisons.convergence import reference_run
-from comparisons.energy import energy_drift
-from comparisons.terms import States, compare_term, random_states
-from comparisons.tolerances import load_tolerances
+from comparisons.judgments.benchmark import (capsize_measure, identify_eigenvalues,
+                                             judge_outcome, roll_rate_envelope, upright_state,
+                                             with_roll_rate)
+from comparisons.judgments.convergence import reference_run
+from comparisons.judgments.energy import energy_drift
+from comparisons.judgments.terms import States, compare_term, random_states
+from comparisons.judgments.tolerances import load_tolerances
+from comparisons.report.figures import save_figure
+from comparisons.stages.benchmark import (MANOEUVRES, benchmark_section, benchmark_terms,
+                                          run_manoeuvres)
 from engines import load_engine
 from reference_model import load_model
 from reference_model.model import DEP, IND
@@ -237,15 +239,17 @@ def test_energy_drift_is_bounded(bench, runs, name):
 # -- the report section --------------------------------------------------------------------------
 
 def test_benchmark_section_passes_and_draws(tmp_path, runs):
-    sec = benchmark_section(tmp_path, quick=True, progress=lambda s: None,
-                            runs=list(runs.values()))
+    sec = benchmark_section(quick=True, runs=list(runs.values()), terms=benchmark_terms(True),
+                            convergence=None)
+    for fig in sec.figures:
+        save_figure(fig.kind, fig.data, tmp_path / "figures" / fig.name)
     assert sec.comparisons and all(c["passed"] is not False for c in sec.comparisons), \
         [c for c in sec.comparisons if c["passed"] is False]
     keys = {"quantity", "scenario", "model", "engines", "max_error", "tolerance", "passed"}
     assert all(keys <= set(c) for c in sec.comparisons)
     for fig in ("benchmark_roll.png", "benchmark_error.png", "benchmark_nonlinear.png",
                 "benchmark_eigenvalues.png"):
-        assert fig in sec.figures and (tmp_path / "figures" / fig).stat().st_size > 0
+        assert fig in {f.name for f in sec.figures} and (tmp_path / "figures" / fig).stat().st_size > 0
     outcomes = {(c["scenario"], c["engines"][0]): c["expected"] for c in sec.comparisons
                 if c["quantity"].startswith("outcome")}
     assert outcomes[("benchmark-v4", "exudyn-redundant")] == "weave grows"

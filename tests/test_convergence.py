@@ -11,10 +11,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from comparisons.convergence import (COMPARED, DEFAULT_STEPS, ConvergenceStudy, convergence_study,
+from comparisons.judgments.convergence import (COMPARED, DEFAULT_STEPS, ConvergenceStudy, convergence_study,
                                      error_vs_time, fit_order, meaningful_horizon,
                                      perturbed_scenario, reference_horizon, reference_run)
-from comparisons.energy import (energy_drift, energy_drifts, free_roll_model, free_roll_scenario)
+from comparisons.judgments.energy import (energy_drift, energy_drifts, free_roll_model, free_roll_scenario)
 from engines import load_engine
 from reference_model import load_model
 from reference_model.scenarios import SCENARIOS

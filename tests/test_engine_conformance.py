@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from comparisons.terms import QUANTITIES, States, compare_term, compare_terms, random_states
-from comparisons.tolerances import load_tolerances
+from comparisons.judgments.terms import QUANTITIES, States, compare_term, compare_terms, random_states
+from comparisons.judgments.tolerances import load_tolerances
 from engines import CAPABILITIES, CapabilityError, Engine, EngineError, load_engine
 from reference_model import load_model
 from reference_model.scenarios import SCENARIOS, run_inverse

@@ -25,10 +25,11 @@ import pytest
 
 import oracle
 from comparisons.cli import UsageError
-from comparisons.diagnose import (TERMS, add_diagnose_parser, diagnose, engine_terms,
-                                  model_terms, parameter_body, run_diagnose)
-from comparisons.faults import FAULTS, run_fault_suite, unfaulted
-from comparisons.terms import random_states
+from comparisons.cli.diagnose import add_diagnose_parser, run_diagnose
+from comparisons.judgments.diagnose import (TERMS, diagnose, engine_terms, model_terms,
+                                            parameter_body)
+from comparisons.judgments.faults import FAULTS, run_fault_suite, unfaulted
+from comparisons.judgments.terms import random_states
 from engines import load_engine
 from reference_model import Model, ParameterError, codegen
 from reference_model.params import PARAMETER_NAMES, THESIS_FILE

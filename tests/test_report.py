@@ -7,8 +7,8 @@ import re
 import pytest
 
 from comparisons.cli import main
-from comparisons.html import markdown_to_html
-from comparisons.runner import summary_table
+from comparisons.report.html import markdown_to_html
+from comparisons.judgments.summary import summary_table
 
 VERDICTS = {"reproduced", "not reproduced", "partly", "not assessed"}
 
@@ -92,11 +92,14 @@ def test_faults_are_detected_and_localized(quick_report):
     assert all(f["verdict"] == "localized" for k, f in exu.items() if k != "contact-switched")
 
 
-def test_report_starts_with_the_summary_table_and_links_every_figure(quick_report):
+def test_report_starts_with_the_verdict_then_claims_then_summary(quick_report):
+    """First screen: the verdict, then (no failures here) the claims, then the summary table;
+    every figure drawn is linked."""
     out, _ = quick_report
     text = (out / "report.md").read_text()
     headings = re.findall(r"^## (.*)$", text, flags=re.M)
-    assert headings[0].startswith("Summary")
+    assert text.splitlines()[2].startswith("**All judged comparisons are within tolerance")
+    assert headings[0].startswith("The thesis's claims") and headings[1].startswith("Summary")
     assert "Where the engines disagree" not in text   # nothing to localize when all agree
     for png in (out / "figures").glob("*.png"):
         assert f"figures/{png.name}" in text
@@ -124,7 +127,7 @@ def test_same_inputs_give_the_same_report(quick_report, tmp_path):
 
 def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
     """A tolerance is a claim: tighten the mass matrix's below round-off and the run must fail."""
-    from comparisons.tolerances import TOLERANCES_FILE
+    from comparisons.judgments.tolerances import TOLERANCES_FILE
     tight = tmp_path / "tight.toml"
     tight.write_text(TOLERANCES_FILE.read_text().replace(
         "[mass_matrix]\ntolerance = 1e-12", "[mass_matrix]\ntolerance = 1e-19"))
@@ -140,7 +143,8 @@ def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
 @pytest.mark.parametrize("args, needle", [
     (["--engines", "reference,bullet"], "unknown engine 'bullet'"),
     (["--scenarios", "zigzag,nope"], "unknown scenario 'nope'"),
-    (["--jobs", "0"], "--jobs must be between 1 and 64"),
+    (["--jobs", "0"], "--jobs must be between 1 and 8"),
+    (["--jobs", "64"], "--jobs must be between 1 and 8"),
     (["--tolerances", "/nonexistent.toml"], "--tolerances: no file"),
 ])
 def test_usage_errors_exit_2_with_one_line(tmp_path, capsys, args, needle):

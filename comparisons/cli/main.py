@@ -17,39 +17,20 @@ one-line message.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
 import numpy as np
 
-EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
-
-
-class UsageError(Exception):
-    """A user mistake: reported on one line, exit status 2."""
+from ..report import frames
+from ..report.files import write_csv
+from .errors import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, exit 2 (argparse prints usage + message otherwise)
         raise UsageError(f"{message} (see '{self.prog} --help')")
-
-
-def _csv_frame(t, q, dq, ddq, extra: dict):
-    import pandas as pd
-
-    from reference_model import COORDINATES
-
-    cols = {"t": t}
-    cols.update({n: q[:, i] for i, n in enumerate(COORDINATES)})
-    cols.update({f"d_{n}": dq[:, i] for i, n in enumerate(COORDINATES)})
-    cols.update({f"dd_{n}": ddq[:, i] for i, n in enumerate(COORDINATES)})
-    cols.update(extra)
-    return pd.DataFrame(cols)
-
-
-def _write_csv(frame, out: Path) -> None:
-    out.parent.mkdir(parents=True, exist_ok=True)
-    frame.to_csv(out, index=False, float_format="%.17g")
 
 
 def _load(model_name: str, contact: str | None):
@@ -65,20 +46,6 @@ def _scenario(name: str, kind: str):
         article = "an" if sc.kind[0] in "aeiou" else "a"
         raise UsageError(f"scenario {name!r} is {article} {sc.kind} scenario; run it with '{other}'")
     return sc
-
-
-def inverse_dynamics_frame(model, sc, reproject: bool = False):
-    from reference_model.scenarios import run_inverse
-    res = run_inverse(model, sc, reproject=reproject)
-    m = res.motion
-    extra = {n: res.T[:, i] for i, n in enumerate(("Mdir", "Mped", "Mvue"))}
-    extra.update({f"lambda_{k + 1}": res.lam[:, k] for k in range(5)})
-    return _csv_frame(m.t, m.q, m.dq, res.ddq, extra), res
-
-
-def simulation_frame(traj):
-    extra = {f"C_{k + 1}": traj.C[:, k] for k in range(5)}
-    return _csv_frame(traj.t, traj.q, traj.dq, traj.ddq, extra)
 
 
 def cmd_models(args) -> int:
@@ -98,8 +65,10 @@ def cmd_scenarios(args) -> int:
 def cmd_inverse_dynamics(args) -> int:
     sc = _scenario(args.scenario, "inverse")
     model = _load(args.model, args.contact)
-    frame, res = inverse_dynamics_frame(model, sc, args.reproject)
-    _write_csv(frame, args.out)
+    from reference_model.scenarios import run_inverse
+    res = run_inverse(model, sc, reproject=args.reproject)
+    frame = frames.inverse_frame(res)
+    write_csv(frame, args.out)
     C = model.constraint_residual(res.motion.q, res.motion.dq)
     print(f"{sc.name} on {model.name} ({model.contact} contact): {len(frame)} samples -> {args.out}")
     print(f"  max |T| = [{', '.join(f'{v:.6g}' for v in np.abs(res.T).max(0))}] N m "
@@ -129,7 +98,7 @@ def cmd_simulate(args) -> int:
         engine = load_engine(args.engine, model)
         traj = engine.simulate(sc, constraints=args.constraints, rtol=args.rtol, atol=args.atol,
                                fall_limit=args.fall_limit)
-    _write_csv(simulation_frame(traj), args.out)
+    write_csv(frames.simulation_frame(traj), args.out)
     how = ", ".join(f"{k}: {v}" for k, v in traj.settings.items()
                     if k in ("constraints", "build", "step", "solver") and v is not None)
     print(f"{sc.name} on {args.engine} / {model.name} ({model.contact} contact, {how}): "
@@ -144,16 +113,18 @@ def cmd_simulate(args) -> int:
 def cmd_run(args) -> int:
     import os
 
-    from .runner import run_report
-    from .tolerances import TOLERANCES_ENV, ToleranceError, load_tolerances
-    if args.jobs is not None and not 1 <= args.jobs <= 64:
-        raise UsageError(f"--jobs must be between 1 and 64; got {args.jobs}")
+    from ..judgments.tolerances import (TOLERANCES_ENV, TOLERANCES_FILE, ToleranceError,
+                                        load_tolerances)
+    from ..report.writer import write_report
+    from ..stages.pipeline import SelectionError, run_comparison, select
+    from ..stages.pool import MAX_WORKERS
+    if args.jobs is not None and not 1 <= args.jobs <= MAX_WORKERS:
+        raise UsageError(f"--jobs must be between 1 and {MAX_WORKERS}; got {args.jobs}")
     if args.tolerances is not None:
         if not args.tolerances.is_file():
             raise UsageError(f"--tolerances: no file {str(args.tolerances)!r}; copy "
-                             "comparisons/tolerances.toml and edit it")
+                             "comparisons/judgments/tolerances.toml and edit it")
         try:
-            from .tolerances import TOLERANCES_FILE
             shipped = load_tolerances(TOLERANCES_FILE)
             mine = load_tolerances(args.tolerances)
         except ToleranceError as exc:
@@ -162,18 +133,40 @@ def cmd_run(args) -> int:
         if missing:
             raise UsageError(f"--tolerances: {args.tolerances} lacks [{missing[0]}]"
                              f"{f' (and {len(missing) - 1} more)' if len(missing) > 1 else ''}; "
-                             "start from a copy of comparisons/tolerances.toml")
+                             "start from a copy of comparisons/judgments/tolerances.toml")
+    elif os.environ.get(TOLERANCES_ENV):
+        try:   # checked before the runs, not after them
+            load_tolerances()
+        except ToleranceError as exc:
+            raise UsageError(f"{TOLERANCES_ENV}: {exc}") from None
+    if args.out.exists() and not args.out.is_dir():
+        raise UsageError(f"--out {args.out} is a file; give a folder for the report")
+    try:
+        opts = select(args.scenarios, args.quick, args.engines)
+    except SelectionError as exc:
+        raise UsageError(str(exc)) from None
+    opts = dataclasses.replace(opts, workers=args.jobs)
     before = os.environ.get(TOLERANCES_ENV)
     try:
         if args.tolerances is not None:   # worker processes inherit it
             os.environ[TOLERANCES_ENV] = str(args.tolerances.resolve())
-        return run_report(args.out, scenarios=args.scenarios, quick=args.quick,
-                          engines=args.engines, workers=args.jobs)
+        result = run_comparison(opts, _progress)
     finally:
         if before is None:
             os.environ.pop(TOLERANCES_ENV, None)
         else:
             os.environ[TOLERANCES_ENV] = before
+    _progress("writing the report ...")
+    path = write_report(result, args.out, progress=_progress)
+    passed = result.summary["passed"]
+    _progress(f"report written to {path} and report.html in "
+              f"{result.timings['total_seconds']:.1f} s of runs: "
+              f"{'all within tolerance' if passed else 'SOMETHING FAILED'}")
+    return EXIT_OK if passed else EXIT_FAIL
+
+
+def _progress(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -227,9 +220,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="comma-separated engines to compare with the reference [all: reference,pinocchio,exudyn]")
     s.add_argument("--quick", action="store_true", help="a fast subset")
     s.add_argument("--jobs", type=int, default=None,
-                   help="worker processes for the engine runs [number of CPUs, at most 4]")
+                   help="worker processes [the machine's cores, never more than the stages]")
     s.add_argument("--tolerances", type=Path, default=None,
-                   help="a tolerance file replacing comparisons/tolerances.toml (same tables)")
+                   help="a tolerance file replacing comparisons/judgments/tolerances.toml (same tables)")
     s.set_defaults(func=cmd_run)
 
     from .diagnose import add_diagnose_parser
@@ -257,10 +250,14 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         print(f"bicycle-xval: error: {exc.strerror or exc}: {exc.filename or ''}", file=sys.stderr)
         return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("bicycle-xval: interrupted; nothing written (an existing report is as it was)",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":
     # Under `python -m comparisons.cli` this file runs as __main__; re-enter through the package
     # module so exception classes are the ones the other modules import.
-    from comparisons.cli import main as _main
+    from comparisons.cli.main import main as _main
     sys.exit(_main())

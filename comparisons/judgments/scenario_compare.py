@@ -19,7 +19,8 @@ import numpy as np
 from reference_model import CONSTRAINT_NAMES, COORDINATES, TORQUE_NAMES
 
 from .convergence import HORIZON_THRESHOLD, Horizon, error_vs_time
-from .scenario_runs import SETUPS, Run
+from engines.runs import Run
+
 from .terms import States, compare_term
 from .tolerances import Tolerance
 
@@ -75,18 +76,17 @@ def compare_inverse(ref: Run, other: Run, tols: dict[str, Tolerance]) -> list[di
     return out
 
 
-def compare_mass_matrix(scenario: str, model, states_q: np.ndarray, engines, tols) -> list[dict]:
-    """M of every engine that provides it at the given states, against the reference."""
+def compare_mass_matrix(scenario: str, model, states_q: np.ndarray, engines: dict,
+                        tols) -> list[dict]:
+    """M of every engine of ``engines`` (label -> engine built from ``model``) that provides it,
+    at the given states, against the reference model's."""
     from engines import load_engine
     ref = load_engine("reference", model)
     n = len(states_q)
     states = States(states_q, np.zeros_like(states_q), np.zeros_like(states_q), np.zeros((n, 3)))
     out = []
-    for label in engines:
-        if label == "reference":
-            continue
-        eng = SETUPS[label].build(model)
-        if not eng.supports("mass_matrix"):
+    for label, eng in engines.items():
+        if label == "reference" or not eng.supports("mass_matrix"):
             continue
         r = compare_term("mass_matrix", ref, eng, states, tols["mass_matrix"])
         out.append({"quantity": "mass_matrix", "scenario": scenario, "model": model.name,
@@ -107,10 +107,12 @@ def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols) -> tupl
         "engines": [ref.engine, other.engine], "max_error": te.worst,
         "tolerance": tol.tolerance if same_solver else None,
         "passed": bool(te.worst <= tol.tolerance) if same_solver else None,
-        "localized_to": f"first past 1e-6: {te.first}; largest: {te.worst_coordinate}",
+        "localized_to": (f"first past {HORIZON_THRESHOLD:g}: {te.first}" if te.first != "-" else
+                         f"none past {HORIZON_THRESHOLD:g}") + f"; largest: {te.worst_coordinate}",
         "horizon": horizon.t, "horizon_reason": horizon.reason,
         "note": ("same integrator and formulation as the reference: judged" if same_solver else
                  "a fixed-step integrator: reported here, judged by its convergence order"),
+        "why": "" if same_solver else "fixed-step integrator, judged by its convergence order",
     }
     return [comp], te
 

@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from .scenario_runs import Run
+from engines.runs import Run
 
 DEPART = 1e-3          # rad: 'identical' to the zig-zag means theta and gamma within 1 mrad
 QUICK_FALL = 2.0       # s: 'falls quickly' = falls within the first 2 s of the 2 pi s run

@@ -1,0 +1,7 @@
+"""Exit statuses and the user-mistake exception of the command line."""
+
+EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+class UsageError(Exception):
+    """A user mistake: reported on one line, exit status 2."""

@@ -1,0 +1,313 @@
+"""The report's figures (matplotlib, Agg): one drawing function per figure kind.
+
+Stages describe a figure as data (`comparisons.stages.results.Figure`: a kind and the arrays
+it needs); `save_figure` draws it and writes the PNG atomically, quantized to a 256-colour
+palette (line plots lose nothing visible and the files shrink about threefold). Conventions:
+every axis carries its unit; a difference of round-off size is drawn as a difference on a log
+scale, never as a signal with an offset; each engine has one fixed style in every figure.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from reference_model import CONSTRAINT_NAMES, TORQUE_NAMES
+
+WIDTH = 10.0        # inches at DPI: the figures fill the report's content width
+DPI = 80
+FLOOR = 1e-17       # log-scale floor for exact zeros
+STYLE = {"reference": dict(color="k", ls="-", lw=1.6),
+         "pinocchio": dict(color="tab:orange", ls="--", lw=1.2),
+         "exudyn-tree": dict(color="tab:blue", ls=":", lw=1.4),
+         "exudyn-redundant": dict(color="tab:green", ls="-.", lw=1.1)}
+#: a signal whose spread is below this fraction of its size is drawn as a deviation (log scale)
+ROUND_OFF_SPREAD = 1e-9
+
+
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def style(engine: str) -> dict:
+    return STYLE.get(engine, dict(lw=1.0))
+
+
+def _semilogy(ax, t, y, **kw):
+    ax.semilogy(t, np.maximum(np.asarray(y, dtype=float), FLOOR), **kw)
+
+
+# -- drawings: each returns a matplotlib figure ----------------------------------------------
+
+def matrix_error(relative, labels, tolerance, title, colorbar):
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(WIDTH * 0.6, WIDTH * 0.5))
+    im = ax.imshow(np.log10(np.maximum(relative, 1e-18)), cmap="viridis", vmin=-18,
+                   vmax=np.log10(tolerance))
+    ax.set_xticks(range(len(labels)), labels, rotation=45)
+    ax.set_yticks(range(len(labels)), labels)
+    fig.colorbar(im, ax=ax, label=colorbar + " [-]")
+    ax.set_title(f"{title}\n(top of the colour scale = the tolerance {tolerance:g})")
+    return fig
+
+
+def error_vs_time(curves, horizon, threshold, title):
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(WIDTH, 3.6))
+    for build, c in curves.items():
+        lab = f"exudyn-{build}"
+        _semilogy(ax, c["t"], c["theta"], label=f"{lab}: theta [rad]", **style(lab))
+        _semilogy(ax, c["t"], c["xc"], label=f"{lab}: xc [m]", color=style(lab).get("color"),
+                  ls="-", lw=0.6, alpha=0.6)
+    ax.axhline(threshold, color="grey", lw=0.8)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("|exudyn - reference| [rad or m]")
+    ax.set_title(title + f" (grey: {threshold:g})")
+    ax.legend(fontsize=7, ncol=2)
+    return fig
+
+
+def convergence(curves, horizon, title):
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(WIDTH * 0.75, 4.2))
+    for c in curves:
+        ax.loglog(c["steps"], c["errors"], "o-", label=c["label"])
+    h = np.array(curves[0]["steps"]) if curves else np.array([1e-3])
+    ax.loglog(h, 120 * h**2, "k--", lw=0.8, label="slope 2 (second order)")
+    ax.set_xlabel("step h [s]")
+    ax.set_ylabel(f"max error up to {horizon} s [rad or m]")
+    ax.set_title(title)
+    ax.legend(fontsize=7)
+    return fig
+
+
+def lean_panels(panels, ylabel):
+    plt = _plt()
+    fig, axes = plt.subplots(len(panels), 1, figsize=(WIDTH, 2.3 * len(panels)), sharex=True,
+                             squeeze=False)
+    for ax, p in zip(axes[:, 0], panels):
+        for lab, (t, y) in p["lines"].items():
+            ax.plot(t, y, label=lab, **style(lab))
+        ax.set_ylabel(ylabel)
+        ax.set_title(p["title"], fontsize=9)
+        ax.grid(True, lw=0.3)
+    axes[0, 0].legend(fontsize=7)
+    axes[-1, 0].set_xlabel("t [s]")
+    return fig
+
+
+def error_panels(panels, threshold):
+    plt = _plt()
+    fig, axes = plt.subplots(len(panels), 1, figsize=(WIDTH, 2.3 * len(panels)), sharex=True,
+                             squeeze=False)
+    for ax, p in zip(axes[:, 0], panels):
+        for lab, c in p["curves"].items():
+            _semilogy(ax, c["t"], c["theta"], label=f"{lab}: theta [rad]", lw=0.9,
+                      color=style(lab).get("color"))
+            _semilogy(ax, c["t"], c["max"], label=f"{lab}: max over q [rad or m]", ls=":", lw=1.1,
+                      color=style(lab).get("color"))
+        ax.axhline(threshold, color="grey", lw=0.8)
+        ax.set_ylim(bottom=1e-12)
+        ax.set_ylabel("|exudyn - ref|\n[rad or m]")
+        ax.set_title(p["title"], fontsize=9)
+        ax.grid(True, lw=0.3)
+    axes[0, 0].legend(fontsize=7, ncol=2)
+    axes[-1, 0].set_xlabel("t [s]")
+    return fig
+
+
+def nonlinear_fits(curves, coefficient, floor):
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(WIDTH * 0.75, 4.2))
+    for c in curves:
+        ax.loglog(c["a"], c["deviation"], "o-", label=c["label"])
+    aa = np.logspace(-4.5, -0.7, 20)
+    ax.loglog(aa, coefficient * aa**2 + floor, "k--", lw=0.8,
+              label=f"tolerance {coefficient:g} a² + {floor:.0e}")
+    ax.set_xlabel("amplitude a = max |theta|, |gamma| [rad]")
+    ax.set_ylabel("|fitted - linear| / |linear| [-]")
+    ax.set_title("eigenvalues from nonlinear runs against the linearization")
+    ax.legend(fontsize=7)
+    return fig
+
+
+def eigenvalues(v, re, im, weave, capsize, model):
+    """Real (black) and imaginary (grey) parts against speed, weave and capsize speeds marked,
+    the self-stable range shaded."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(WIDTH, 4.8))
+    for k in range(re.shape[1]):
+        ax.plot(v, np.where(im[:, k] > 0, im[:, k], np.nan), ".", color="0.6", ms=2,
+                label="imaginary part" if k == 0 else None)
+        ax.plot(v, re[:, k], ".", color="k", ms=2, label="real part" if k == 0 else None)
+    ax.axhline(0.0, color="0.3", lw=0.6)
+    for speed, name, ls in ((weave, "weave", "--"), (capsize, "capsize", ":")):
+        if speed is not None:
+            ax.axvline(speed, color="tab:blue", ls=ls, lw=1.0, label=f"{name} speed {speed:.6f} m/s")
+    if weave is not None and capsize is not None and capsize > weave:
+        ax.axvspan(weave, capsize, color="tab:green", alpha=0.12, label="self-stable")
+    if v.max() > v.min():
+        ax.set_xlim(v.min(), v.max())
+    ax.set_xlabel("forward speed v [m/s]")
+    ax.set_ylabel("eigenvalue [1/s]")
+    ax.set_title(f"{model}: roll/steer eigenvalues about upright straight running")
+    ax.legend(loc="lower left", fontsize=8, markerscale=4)
+    ax.grid(True, lw=0.3)
+    return fig
+
+
+def torque_overlay(scenario, runs):
+    """Rider torques of every engine overlaid (a torque constant to round-off is drawn as its
+    deviation from its mean, on a log scale), and each engine's |difference| to the reference."""
+    plt = _plt()
+    ref = runs["reference"]
+    fig, ax = plt.subplots(4, 1, figsize=(WIDTH, 8), sharex=True)
+    for i, n in enumerate(TORQUE_NAMES):
+        values = np.concatenate([r.T[:, i] for r in runs.values()])
+        size = float(np.abs(values).max())
+        if size > 0 and np.ptp(values) <= ROUND_OFF_SPREAD * size:
+            mean = float(values.mean())
+            for eng, r in runs.items():
+                _semilogy(ax[i], r.t, np.abs(r.T[:, i] - mean), label=eng, **style(eng))
+            ax[i].set_ylabel(f"|{n} - {mean:.6g}|\n[N m]")
+            ax[i].set_title(f"{n} is constant ({mean:.6g} N m) to round-off: its deviation",
+                            fontsize=8)
+            continue
+        for eng, r in runs.items():
+            ax[i].plot(r.t, r.T[:, i], label=eng, **style(eng))
+        ax[i].ticklabel_format(axis="y", useOffset=False)
+        ax[i].set_ylabel(f"{n} [N m]")
+    ax[0].legend(fontsize=7)
+    for eng, r in runs.items():
+        if eng != "reference":
+            _semilogy(ax[3], r.t, np.abs(r.T - ref.T).max(axis=1), label=f"{eng}: max over torques",
+                      **style(eng))
+    ax[3].set_ylabel("|T - T_ref| [N m]")
+    ax[3].set_xlabel("t [s]")
+    if len(runs) > 1:
+        ax[3].legend(fontsize=7)
+    else:
+        ax[3].text(0.5, 0.5, "no second engine with inverse dynamics", ha="center",
+                   transform=ax[3].transAxes)
+    fig.suptitle(f"{scenario}: rider torques from inverse dynamics, every engine")
+    return fig
+
+
+def trajectory_overlay(scenario, runs, errors, horizon, threshold):
+    """theta and gamma of every engine against time, and the error of all eight coordinates
+    (max over them) against time on a log scale up to the horizon."""
+    plt = _plt()
+    fig, ax = plt.subplots(3, 1, figsize=(WIDTH, 7), sharex=True)
+    for eng, r in runs.items():
+        ax[0].plot(r.t, r.q[:, 3], label=f"{eng} ({r.status} at {r.t_end:.2f} s)", **style(eng))
+        ax[1].plot(r.t, r.q[:, 6], **style(eng))
+    ax[0].set_ylabel("theta (lean) [rad]")
+    ax[1].set_ylabel("gamma (steer) [rad]")
+    ax[0].legend(fontsize=7)
+    for eng, (t, e) in errors.items():
+        if len(t):
+            _semilogy(ax[2], t, e, label=f"{eng}: max over the 8 coordinates", **style(eng))
+    for a in ax:
+        a.axvline(horizon, color="grey", lw=0.8)
+    ax[2].axhline(threshold, color="grey", lw=0.6, ls="--")
+    ax[2].set_ylabel("|q - q_ref| [rad or m]")
+    ax[2].set_xlabel(f"t [s] (grey line: meaningful horizon {horizon:.2f} s)")
+    if errors:
+        ax[2].legend(fontsize=7)
+    fig.suptitle(f"{scenario}: every engine against the reference")
+    return fig
+
+
+def constraint_residuals(panels, bound):
+    """One row per forward scenario: the position constraint rD_z (m) on the left, the largest
+    velocity constraint (m/s) on the right, one line per engine, measured by the reference."""
+    plt = _plt()
+    fig, axes = plt.subplots(len(panels), 2, figsize=(WIDTH, 1.9 * len(panels) + 0.8),
+                             sharex=True, squeeze=False)
+    for row, (name, lines) in zip(axes, panels.items()):
+        for eng, (t, pos, vel) in lines.items():
+            _semilogy(row[0], t, pos, label=eng, **style(eng))
+            _semilogy(row[1], t, vel, label=eng, **style(eng))
+        for a in row:
+            a.axhline(bound, color="r", lw=0.6, ls="--")
+        row[0].set_ylabel(f"{name}\n|{CONSTRAINT_NAMES[0]}| [m]", fontsize=8)
+        row[1].set_ylabel(f"max |{', '.join(CONSTRAINT_NAMES[1:])}|\n[m/s]", fontsize=8)
+    axes[0, 0].set_title("position constraint [m]", fontsize=9)
+    axes[0, 1].set_title("velocity constraints [m/s]", fontsize=9)
+    axes[0, 0].legend(fontsize=7, ncol=3)
+    for a in axes[-1]:
+        a.set_xlabel(f"t [s] (red: the thesis's bound {bound:g})")
+    fig.suptitle("constraint residual of every run, measured by the reference model")
+    return fig
+
+
+def stability_study(runs):
+    """theta against time for the stability runs (thesis Figs. 6-4 to 6-7), a panel per engine;
+    ``runs``: engine -> {scenario: (t, theta, status, t_end)}."""
+    plt = _plt()
+    engines = list(runs)
+    fig, axes = plt.subplots(1, len(engines), figsize=(WIDTH, 3.8), sharey=True, squeeze=False)
+    for ax, eng in zip(axes[0], engines):
+        for name, (t, theta, status, t_end) in sorted(
+                runs[eng].items(), key=lambda kv: float(kv[0].split("psid")[1])):
+            ax.plot(t, theta, label=f"psi_dot(0) = {name.split('psid')[1]} rad/s ({status} "
+                                    f"{t_end:.2f} s)")
+        ax.set_title(eng)
+        ax.set_xlabel("t [s]")
+        ax.legend(fontsize=6)
+    axes[0, 0].set_ylabel("theta (lean) [rad]")
+    fig.suptitle("stability study (thesis Figs. 6-4 to 6-7), every engine")
+    return fig
+
+
+def replay_vs_zigzag(zigzag, replays):
+    """theta and gamma of each engine's replay against the zig-zag it should reproduce;
+    ``zigzag`` and each replay: (t, theta, gamma)."""
+    plt = _plt()
+    fig, ax = plt.subplots(2, 1, figsize=(WIDTH, 5), sharex=True)
+    for i, lab in enumerate(("theta", "gamma")):
+        ax[i].plot(zigzag[0], zigzag[1 + i], color="0.6", lw=3, label="zigzag (inverse kinematics)")
+        for eng, r in replays.items():
+            ax[i].plot(r[0], r[1 + i], label=f"replay on {eng}", **style(eng))
+        ax[i].set_ylabel(f"{lab} [rad]")
+    ax[0].legend(fontsize=7)
+    ax[-1].set_xlabel("t [s]")
+    fig.suptitle("replay: forward motion under the zig-zag's torques, every engine")
+    return fig
+
+
+DRAWINGS: dict[str, Callable] = {f.__name__: f for f in (
+    matrix_error, error_vs_time, convergence, lean_panels, error_panels, nonlinear_fits,
+    eigenvalues, torque_overlay, trajectory_overlay, constraint_residuals, stability_study,
+    replay_vs_zigzag)}
+
+
+def png_bytes(fig) -> bytes:
+    """The figure as a palette PNG (deterministic: no software or date metadata)."""
+    from PIL import Image
+    plt = _plt()
+    buf = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
+    plt.close(fig)
+    buf.seek(0)
+    image = Image.open(buf).convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT,
+                                                     dither=Image.Dither.NONE)
+    out = io.BytesIO()
+    image.save(out, format="png", optimize=True)
+    return out.getvalue()
+
+
+def save_figure(kind: str, data: dict, path: Path) -> Path:
+    """Draw figure ``kind`` from ``data`` and write it to ``path`` (PNG, atomically)."""
+    from .files import write_bytes
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise ValueError(f"figure file {path} must end in .png (the figures are PNG images)")
+    return write_bytes(path, png_bytes(DRAWINGS[kind](**data)))

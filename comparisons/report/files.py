@@ -1,0 +1,121 @@
+"""Files the harness writes, written so that none is ever left half-written.
+
+Every file goes to a temporary name in its own folder and is renamed over the target only when
+complete (``os.replace`` is atomic on one file system); text is always UTF-8, whatever the
+locale. A report folder is assembled beside its destination and swapped in whole
+(`ReportFolder`), so an interrupted run leaves either the old complete report or nothing new,
+and files in the destination that the harness did not write are never touched.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+#: what a report folder holds that the harness wrote; nothing else is ever moved or deleted
+MANIFEST = ".bicycle-xval-files"
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextmanager
+def atomic_path(path: Path, suffix: str = ""):
+    """A temporary path beside ``path``; renamed onto ``path`` when the block ends without an
+    exception, removed otherwise."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or path.suffix,
+                               dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())     # mkstemp's 0600 is for the temporary only
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_text(path: Path, text: str) -> Path:
+    """Write ``text`` as UTF-8 to ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+def write_bytes(path: Path, data: bytes) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+    return Path(path)
+
+
+def write_csv(frame, path: Path) -> Path:
+    """A pandas DataFrame as CSV (17 significant digits, UTF-8) written atomically."""
+    with atomic_path(path, ".csv") as tmp:
+        frame.to_csv(tmp, index=False, float_format="%.17g", encoding="utf-8")
+    return Path(path)
+
+
+class ReportFolder:
+    """A report assembled in a fresh folder beside ``out`` and swapped in when complete.
+
+    ``with ReportFolder(out) as folder: ... folder.path / "report.md" ...``: on success the
+    files the previous run wrote (listed in its manifest) are removed from ``out``, the new ones
+    moved in, and the manifest rewritten; files the harness did not write stay as they were.
+    On an exception (Ctrl-C, SIGTERM, a failure) the staging folder is removed and ``out`` is
+    untouched."""
+
+    def __init__(self, out: Path):
+        self.out = Path(out)
+        if self.out.exists() and not self.out.is_dir():
+            raise NotADirectoryError(f"--out {self.out} is a file; give a folder")
+        self.out.parent.mkdir(parents=True, exist_ok=True)
+        self.path: Path | None = None
+
+    def __enter__(self) -> "ReportFolder":
+        self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.partial-", dir=self.out.parent))
+        os.chmod(self.path, 0o777 & ~_umask())
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        staged = self.path
+        if exc_type is not None:
+            shutil.rmtree(staged, ignore_errors=True)
+            return False
+        blocked = {signal.SIGINT, signal.SIGTERM}
+        previous = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)   # the swap is not cut
+        try:
+            self._swap(staged)
+        finally:
+            shutil.rmtree(staged, ignore_errors=True)
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        return False
+
+    def _swap(self, staged: Path) -> None:
+        new = sorted(str(p.relative_to(staged)) for p in staged.rglob("*") if p.is_file())
+        if not self.out.exists():
+            os.replace(staged, self.out)            # the common case: one atomic rename
+            write_text(self.out / MANIFEST, "\n".join(new) + "\n")
+            return
+        manifest = self.out / MANIFEST
+        old = manifest.read_text(encoding="utf-8").split() if manifest.is_file() else []
+        for rel in old:                             # only what an earlier run wrote
+            target = self.out / rel
+            if target.is_file() and rel not in new:
+                target.unlink()
+        for rel in new:
+            target = self.out / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(staged / rel, target)
+        write_text(manifest, "\n".join(new) + "\n")
+        for folder in sorted({(self.out / r).parent for r in old}, reverse=True):
+            if folder != self.out and folder.is_dir() and not any(folder.iterdir()):
+                folder.rmdir()

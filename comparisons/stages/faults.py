@@ -1,0 +1,64 @@
+"""The fault-injection stage and the localization of failing term comparisons."""
+
+from __future__ import annotations
+
+from ..judgments.faults import run_fault_suite
+from .results import Section
+
+TERM_QUANTITIES = ("mass_matrix", "inverse_dynamics", "gravity", "generalized_forces",
+                   "constraint_jacobian", "constraint_bias", "forward_acceleration", "torques",
+                   "multipliers")
+FAULT_ENGINES = ("pinocchio", "exudyn")
+
+
+def fault_entries(engine: str) -> list[dict]:
+    """The fault suite against one engine (a stage: worker processes call it). Pinocchio
+    computes every term, so every fault must be detected and localized on it; the Exudyn tree
+    gives only M and the generalized forces, so a fault confined to D and dD dq (the contact
+    switch) is not observable there and is listed as such, not counted as missed."""
+    entries = []
+    for r in run_fault_suite(engines=(engine,)):
+        d = r.to_dict()
+        d["engine"] = engine
+        d["verdict"] = ("localized" if r.correct else "not observable" if not r.observable
+                        else "detected, mislocalized" if r.detected else "missed")
+        entries.append(d)
+    return entries
+
+
+def fault_section(entries: list[dict]) -> Section:
+    sec = Section("Fault injection: does the harness catch a broken model?")
+    sec.text("Broken copies of the reference model are run against engines built from the "
+             "correct parameters (16 deterministic states). Each fault must be detected (a term "
+             "fails its tolerance) and localized: the differing terms, and the parameter or "
+             "structural cause, with its body, that explains at least 99 % of the difference "
+             "(least squares over the sensitivities of all 30 parameters and the structural "
+             "causes; `comparisons/judgments/diagnose.py`). The same machinery is "
+             "`bicycle-xval diagnose FILE` for your own parameter file. 'not observable': the "
+             "engine does not provide the terms the fault changes (it is not counted as missed).")
+    sec.table(("fault", "engine", "detected", "localized to", "expected", "verdict", "evidence"),
+              [(e["fault"], e["engine"], "yes" if e["detected"] else "no", e["localized_to"],
+                e["expected"], e["verdict"], e["evidence"]) for e in entries])
+    return sec
+
+
+def localization_lines(comparisons) -> list[tuple[str, str]]:
+    """For every (model, engine) whose terms or inverse dynamics failed a tolerance: a heading
+    and the localization (`diagnose.localize`): which terms, which entries, and the parameter
+    or structural cause (with its body) that best explains the difference. Empty when
+    everything agrees."""
+    from reference_model import load_model
+    from ..judgments.diagnose import localize
+    from ..judgments.terms import random_states
+    from .runs import SETUPS
+    pairs = sorted({(c.get("model", "thesis"), c["engines"][1]) for c in comparisons
+                    if c["passed"] is False and c["quantity"] in TERM_QUANTITIES
+                    and len(c["engines"]) == 2})
+    out = []
+    for model_name, engine in pairs:
+        if engine not in SETUPS:
+            continue
+        model = load_model(model_name)
+        loc = localize(model, random_states(16, seed=11), [SETUPS[engine].build(model)])
+        out.append((f"{model_name}: reference vs {engine}", loc.describe()))
+    return out

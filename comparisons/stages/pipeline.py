@@ -1,0 +1,288 @@
+"""`bicycle-xval run` as a computation: every stage, in parallel where independent, judged.
+
+Stages (each a top-level call, run in worker processes by `pool.run_tasks`, longest first):
+
+* every selected scenario on every engine setup (`runs.run_one`), the reference included;
+* the meaningful horizon of each forward scenario (two reference runs 1e-9 rad/s apart);
+* the engine sections: Pinocchio and Exudyn's tree term by term, Exudyn's trajectories per
+  scenario, its convergence order, the energy drift (`engines`);
+* the benchmark bicycle: terms, each IFToMM manoeuvre, Exudyn's convergence (`benchmark`);
+* the fault-injection suite, per engine (`faults`).
+
+Then, in this process, what depends on them: each scenario's comparisons, the thesis's claims,
+the localization of anything that failed, the summary table. `run_comparison` returns a
+`ComparisonResult` of plain data; `comparisons.report` writes it. Run times are kept apart
+(``timings``) so identical inputs give byte-identical reports.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import time
+from dataclasses import dataclass, field
+from importlib import metadata
+from pathlib import Path
+from typing import Callable
+
+from engines.runs import Run
+
+from ..judgments.claims import judge_claims
+from ..judgments.summary import summary_table
+from .pool import Task, run_tasks
+from .results import Section
+
+QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
+ENGINE_NAMES = ("reference", "pinocchio", "exudyn")
+
+
+class SelectionError(ValueError):
+    """A scenario or engine selection that cannot be run (the CLI reports it as a usage error)."""
+
+
+@dataclass(frozen=True)
+class Options:
+    """What `bicycle-xval run` was asked to do."""
+
+    scenarios: tuple[str, ...]
+    engines: tuple[str, ...]          # engine names, reference first
+    quick: bool = False
+    workers: int | None = None
+
+
+@dataclass
+class ComparisonResult:
+    """Everything the report shows: summary.json's content, the sections in report order, the
+    localization of failures, the runs (for the data files) and the run times."""
+
+    options: Options
+    summary: dict
+    sections: list[Section]
+    localization: list[tuple[str, str]]
+    runs: dict[tuple[str, str], Run]
+    timings: dict = field(default_factory=dict)
+
+
+def select(scenarios: str | None, quick: bool, engines: str | None) -> Options:
+    """The scenario and engine names from the command line's comma-separated lists."""
+    from reference_model.scenarios import SCENARIOS
+    thesis = [n for n, sc in SCENARIOS.items() if "benchmark" not in sc.tags]
+    names = thesis if scenarios is None else [s.strip() for s in scenarios.split(",") if s.strip()]
+    if quick and scenarios is None:
+        names = list(QUICK)
+    if not names:
+        raise SelectionError("--scenarios is empty; give a comma-separated list, e.g. check,zigzag")
+    for n in names:
+        if n not in SCENARIOS:
+            raise SelectionError(f"unknown scenario {n!r} in --scenarios; choose from "
+                                 f"{', '.join(SCENARIOS)}")
+    chosen = list(ENGINE_NAMES) if engines is None else [e.strip() for e in engines.split(",")
+                                                         if e.strip()]
+    for e in chosen:
+        if e not in ENGINE_NAMES:
+            raise SelectionError(f"unknown engine {e!r} in --engines; choose from "
+                                 f"{', '.join(ENGINE_NAMES)}")
+    if "reference" not in chosen:
+        chosen.insert(0, "reference")   # everything is compared against it
+    return Options(tuple(names), tuple(dict.fromkeys(chosen)), quick)
+
+
+# -- environment -------------------------------------------------------------------------------
+
+def _versions() -> dict:
+    out = {"python": sys.version.split()[0]}
+    for pkg in ("numpy", "scipy", "sympy", "pandas", "matplotlib", "pin", "exudyn"):
+        try:
+            out[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            out[pkg] = "not installed"
+    return out
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return " ".join(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def environment(setups) -> dict:
+    """What the numbers depend on (no times, no dates: those are in timings.json)."""
+    from ..judgments.convergence import DEFAULT_STEPS, REFERENCE_RTOL
+    from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP
+    return {
+        "packages": _versions(),
+        "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "arch": platform.machine(),
+                    "platform": platform.platform(terse=True)},
+        "solvers": {s.label: s.settings for s in setups},
+        "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(DEFAULT_STEPS),
+                  "convergence_horizon_s": CONVERGENCE_HORIZON,
+                  "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01},
+        "run_times": "timings.json (kept apart: they vary from run to run)",
+    }
+
+
+# -- the stages ----------------------------------------------------------------------------------
+
+def _tasks(opts: Options, labels: list[str]) -> list[Task]:
+    from reference_model.scenarios import get_scenario
+    from . import benchmark, engines, faults, scenarios
+    from .runs import cost, run_one
+    tasks = [Task(("run", lab, n), run_one, (lab, n), cost(lab, n), f"{n} on {lab}")
+             for n in opts.scenarios for lab in labels]
+    for n in opts.scenarios:
+        sc = get_scenario(n)
+        if sc.kind == "forward" and "trajectory" in sc.compared:
+            tasks.append(Task(("horizon", n), scenarios.horizon_of, (n,), 0.3,
+                              f"{n}: meaningful horizon"))
+    quick = opts.quick
+    if "pinocchio" in opts.engines:
+        n = 50 if quick else 200
+        tasks.append(Task("pinocchio-terms", engines.pinocchio_terms, (n,), 1.5,
+                          "Pinocchio term by term"))
+        tasks.append(Task(("faults", "pinocchio"), faults.fault_entries, ("pinocchio",), 4.0,
+                          "fault injection on Pinocchio"))
+    if "exudyn" in opts.engines:
+        tasks.append(Task("exudyn-terms", engines.exudyn_terms, (20 if quick else 100,), 1.0,
+                          "Exudyn tree term by term"))
+        for n in (engines.QUICK_FORWARD if quick else engines.FORWARD):
+            tasks.append(Task(("exudyn-trajectory", n), engines.exudyn_trajectory, (n,),
+                              6.0 if n == "replay" else 2.5, f"Exudyn trajectories: {n}"))
+        tasks.append(Task("exudyn-convergence", engines.exudyn_convergence, (quick,),
+                          5.0 if quick else 8.0, "Exudyn convergence order"))
+        tasks.append(Task("energy", engines.energy_section, (), 2.0, "energy drift"))
+        tasks.append(Task(("faults", "exudyn"), faults.fault_entries, ("exudyn",), 3.0,
+                          "fault injection on Exudyn's tree"))
+    if "pinocchio" in opts.engines and "exudyn" in opts.engines:
+        builds = benchmark.QUICK_BUILDS if quick else benchmark.BUILDS
+        tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (quick,), 1.5,
+                          "benchmark terms"))
+        for n in benchmark.MANOEUVRES:
+            tasks.append(Task(("benchmark", n), benchmark.benchmark_manoeuvre, (n, builds),
+                              4.0 if len(builds) > 1 else 2.5, f"benchmark {n}"))
+        if not quick:
+            tasks.append(Task("benchmark-convergence", benchmark.benchmark_convergence, (), 6.0,
+                              "benchmark: Exudyn convergence"))
+    return tasks
+
+
+def _failed_stage(title: str, error: str) -> Section:
+    sec = Section(title)
+    sec.text(f"**This stage failed**: {error}")
+    sec.comparisons.append({"quantity": "stage", "scenario": title, "model": "-",
+                            "engines": ["-"], "max_error": None, "tolerance": None,
+                            "passed": False, "localized_to": error})
+    return sec
+
+
+def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: None
+                   ) -> ComparisonResult:
+    """Every stage of the run (module docstring), judged; nothing written."""
+    from . import benchmark, engines, faults, scenarios
+    from .runs import setups_for
+
+    t_start = time.perf_counter()
+    setups = setups_for(opts.engines)
+    labels = [s.label for s in setups]
+    tasks = _tasks(opts, labels)
+    progress(f"{len(tasks)} stages on {opts.workers or 'all'} worker(s): "
+             f"{len(opts.scenarios)} scenario(s) on {', '.join(labels)}, engine sections, "
+             "faults ...")
+    done = run_tasks(tasks, opts.workers, progress)
+    timings = {"stages": {t.label: round(done[t.key].seconds, 3) for t in tasks}}
+
+    def value(key, title):
+        r = done[key]
+        return (r.value, None) if r.error is None else (None, _failed_stage(title, r.error))
+
+    runs = {}
+    for n in opts.scenarios:
+        for lab in labels:
+            r = done[("run", lab, n)]
+            runs[(lab, n)] = r.value if r.error is None else Run(
+                lab, n, "-", "-", "failed", r.error, 0.0)
+    t0 = time.perf_counter()
+    horizons = {key[1]: r.value for key, r in done.items()
+                if isinstance(key, tuple) and key[0] == "horizon" and r.error is None}
+    rows, checks, corrections = scenarios.reference_rows(opts.scenarios, runs)
+    from reference_model import load_model
+    sections = [scenarios.compare_scenarios(opts.scenarios, labels, runs, horizons)]
+    claims = judge_claims(runs, labels, load_model("thesis"), opts.scenarios)
+
+    def add(key, title, build=lambda v: v):
+        if key in done:
+            v, failed = value(key, title)
+            sections.append(failed or build(v))
+
+    add("pinocchio-terms", "Reference vs Pinocchio, term by term")
+    add("exudyn-terms", "Reference vs Exudyn kinematic tree, term by term")
+    traj_keys = [k for k in done if isinstance(k, tuple) and k[0] == "exudyn-trajectory"]
+    if traj_keys:
+        parts, failures = [], []
+        for k in traj_keys:
+            v, failed = value(k, f"Exudyn trajectories: {k[1]}")
+            (parts.append(v) if failed is None else failures.append(failed))
+        sections.append(engines.merge_trajectories(parts))
+        sections += failures
+    add("exudyn-convergence", "Exudyn convergence")
+    add("energy", "Energy drift")
+    if "benchmark-terms" in done:
+        bench_runs = [value(("benchmark", n), f"benchmark {n}") for n in benchmark.MANOEUVRES]
+        terms, failed_terms = value("benchmark-terms", "benchmark terms")
+        conv = value("benchmark-convergence", "benchmark convergence")[0] \
+            if "benchmark-convergence" in done else None
+        broken = [f for _, f in bench_runs if f is not None] + ([failed_terms] if failed_terms else [])
+        if broken:
+            sections += broken
+        else:
+            sections.append(benchmark.benchmark_section(opts.quick, [v for v, _ in bench_runs],
+                                                        terms, conv))
+    fault_rows = []
+    for e in faults.FAULT_ENGINES:
+        if ("faults", e) in done:
+            v, failed = value(("faults", e), f"fault injection on {e}")
+            if failed is None:
+                fault_rows += v
+            else:
+                sections.append(failed)
+    if fault_rows:
+        sections.append(faults.fault_section(fault_rows))
+
+    comparisons = [c for s in sections for c in s.comparisons]
+    localization = faults.localization_lines(comparisons)
+    failed = (any(c["passed"] is False for c in checks)
+              or any(r["status"] == "failed" for r in rows)
+              or any(c["passed"] is False for c in comparisons)
+              or any(f["verdict"] not in ("localized", "not observable") for f in fault_rows))
+    summary = {
+        "passed": not failed,
+        "engines": list(opts.engines),
+        "scenarios": rows,
+        "engine_runs": [{"engine": r.engine, "scenario": r.scenario, "model": r.model,
+                         "status": r.status, "t_end": round(r.t_end, 6), "message": r.message}
+                        for (lab, name), r in sorted(runs.items(), key=lambda kv: (kv[0][1], kv[0][0]))],
+        "summary_table": summary_table(comparisons),
+        "comparisons": comparisons,
+        "claims": claims,
+        "faults": fault_rows,
+        "checks": checks,
+        "initial_corrections": corrections,
+        "expected_differences": _expected_differences(opts.scenarios),
+        "environment": environment(setups),
+        "quick": opts.quick,
+    }
+    timings["judging in the main process"] = round(time.perf_counter() - t0, 3)
+    timings["engine_run_seconds"] = {f"{n} on {lab}": round(r.seconds, 3)
+                                     for (lab, n), r in sorted(runs.items())}
+    timings["total_seconds"] = round(time.perf_counter() - t_start, 3)
+    return ComparisonResult(opts, summary, sections, localization, runs, timings)
+
+
+def _expected_differences(names) -> list[dict]:
+    from reference_model.scenarios import get_scenario
+    return [{"scenario": n, "quantity": e.quantity, "engines": e.engines, "expected": e.expected,
+             "reason": e.reason} for n in names for e in get_scenario(n).expected_differences]

@@ -1,0 +1,84 @@
+"""Every scenario on every engine that can run it, the thesis's way.
+
+An *engine setup* is an engine with its options, labelled as the report names it:
+
+| label        | engine     | runs                                                                |
+|--------------|------------|---------------------------------------------------------------------|
+| reference    | reference  | inverse (13x13 inverse dynamics) and forward (DOP853, the scenario's |
+|              |            | constraint handling: Baumgarte a1 = a2 = 10 as the thesis)          |
+| pinocchio    | pinocchio  | the same solvers on Pinocchio's M, RNEA and contact kinematics       |
+| exudyn-tree  | exudyn     | forward only: kinematic tree, generalized-alpha, h = 1e-3 s, the     |
+|              |            | model's own front contact (user constraints for the thesis contact) |
+
+`run_one` is a top-level function of (label, scenario name), so the pipeline farms runs out to
+worker processes: the report's numbers do not depend on the order or the process they ran in.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from engines.runs import Run, run_scenario
+
+EXUDYN_STEP = 1e-3
+
+
+@dataclass(frozen=True)
+class EngineSetup:
+    """An engine and its options under the label the report uses."""
+
+    label: str
+    engine: str
+    options: tuple[tuple[str, object], ...] = ()
+    kinds: tuple[str, ...] = ("inverse", "forward")
+    settings: str = ""
+
+    def build(self, model):
+        from engines import load_engine
+        return load_engine(self.engine, model, **dict(self.options))
+
+
+SETUPS: dict[str, EngineSetup] = {s.label: s for s in (
+    EngineSetup("reference", "reference",
+                settings="inverse: inverse kinematics DOP853 rtol 1e-12 + 13x13 LU; forward: "
+                         "DOP853 rtol 1e-10, atol 1e-12, the scenario's constraint handling "
+                         "(Baumgarte a1 = a2 = 10)"),
+    EngineSetup("pinocchio", "pinocchio",
+                settings="the reference's solvers on Pinocchio's crba, rnea and frame kinematics "
+                         "(same integrator and tolerances)"),
+    EngineSetup("exudyn-tree", "exudyn", (("build", "tree"), ("step", EXUDYN_STEP)),
+                kinds=("forward",),
+                settings=f"ObjectKinematicTree, generalized-alpha (spectral radius 0.9, index 3), "
+                         f"h = {EXUDYN_STEP:g} s, Newton tolerance 1e-10; no inverse dynamics"),
+)}
+ENGINE_SETUPS = {"reference": ("reference",), "pinocchio": ("pinocchio",),
+                 "exudyn": ("exudyn-tree",)}
+
+
+def setups_for(engines) -> list[EngineSetup]:
+    """The setups of the selected engine names, reference first."""
+    labels = [lab for e in engines for lab in ENGINE_SETUPS.get(e, ())]
+    return [SETUPS[lab] for lab in labels]
+
+
+def run_one(label: str, scenario: str) -> Run:
+    """Run ``scenario`` on the setup ``label`` (a top-level function: worker processes call it)."""
+    from reference_model import load_model
+    from reference_model.scenarios import get_scenario
+
+    sc = get_scenario(scenario)
+    setup = SETUPS[label]
+    model = load_model(sc.model)
+    if sc.kind not in setup.kinds:
+        return run_scenario(label, None, model, sc, setup.kinds)
+    engine = None if (label == "reference" and sc.kind == "inverse") else setup.build(model)
+    return run_scenario(label, engine, model, sc, setup.kinds)
+
+
+def cost(label: str, scenario: str) -> float:
+    """A rough run time for scheduling (s), measured on the 2-core machine."""
+    if scenario in ("check", "zigzag"):
+        return 0.1 if label == "reference" else 0.8
+    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6}.get(label, 1.0)
+    length = 6.3 if scenario in ("replay", "check-forward") else 1.2
+    return per_second * length

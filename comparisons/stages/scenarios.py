@@ -1,0 +1,140 @@
+"""The scenario stages of `bicycle-xval run`: every selected scenario on the reference model,
+then every engine's run of it compared with the reference's as its registry entry says
+(`reference_model.scenarios`: ``compared``), and the thesis's claims judged engine by engine.
+
+`reference_rows` is the table of the reference's own runs with the analytic check of the check
+scenario; `compare_scenarios` returns the comparisons section with its figures' data.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from engines.runs import Run
+from reference_model import CONSTRAINT_NAMES, load_model
+from reference_model.scenarios import get_scenario
+
+from ..judgments.convergence import HORIZON_THRESHOLD, reference_horizon
+from ..judgments.scenario_compare import (compare_constraints, compare_forward, compare_inverse,
+                                          compare_mass_matrix, constraint_series)
+from ..judgments.tolerances import load_tolerances
+from .results import Section, num, verdict_word
+from .runs import SETUPS
+
+CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative to Mped
+M_STATES = 100           # states along a run at which M is compared
+
+
+def horizon_of(name: str):
+    """The meaningful horizon of a forward scenario (two reference runs; a stage of its own)."""
+    sc = get_scenario(name)
+    return reference_horizon(load_model(sc.model), sc)
+
+
+def analytic_check(run: Run, model) -> dict:
+    """The check scenario's analytic torques: Mped = cv (R psi_dot)^2 R, Mdir = Mvue = 0."""
+    p = model.params
+    expected = p.cv * (p.R_rear * 5.0) ** 2 * p.R_rear
+    err = float(np.max(np.abs(run.T - [0.0, expected, 0.0])))
+    return {"check": "check: Mped = cv (R psi_dot)^2 R, Mdir = Mvue = 0",
+            "value": err, "tolerance": CHECK_RELATIVE * expected,
+            "passed": bool(err <= CHECK_RELATIVE * expected),
+            "evidence": f"Mped = {expected:.12g} N m expected; max deviation {err:.2e} N m over "
+                        f"{len(run.t)} samples"}
+
+
+def reference_rows(names, runs: dict) -> tuple[list[dict], list[dict], dict[str, str]]:
+    """(rows of the reference's runs, analytic checks, initial-state corrections by scenario)."""
+    rows, checks, corrections = [], [], {}
+    for name in names:
+        run = runs[("reference", name)]
+        model = load_model(get_scenario(name).model)
+        C = model.constraint_residual(run.q, run.dq) if run.t.size else np.zeros((1, 5))
+        rows.append({"scenario": name, "kind": run.kind, "status": run.status,
+                     "t_end": f"{run.t_end:.3f}", "max_abs_C": f"{np.abs(C).max():.1e}"})
+        if run.kind == "inverse" and name == "check" and run.T is not None:
+            checks.append(analytic_check(run, model))
+        if run.trajectory is not None and "initial_correction" in run.trajectory.settings:
+            corrections[name] = run.trajectory.settings["initial_correction"]
+    return rows, checks, corrections
+
+
+def compare_scenarios(names, labels, runs: dict, horizons: dict) -> Section:
+    """What each scenario's registry entry says is compared, with the figures' data."""
+    tols = load_tolerances()
+    sec = Section("Every engine on every scenario")
+    sec.text("What each scenario's registry entry (`reference_model/scenarios.py`) lists as "
+             f"compared: M at ~{M_STATES} of the reference's states, torques and multipliers "
+             "along the inverse scenarios, all eight coordinates up to the *meaningful horizon* "
+             "(where two reference runs 1e-9 rad/s apart in theta_dot(0) part by more than "
+             f"{HORIZON_THRESHOLD:g}: the bike is unstable, beyond it no comparison means "
+             "anything) and the constraint residual of every run, measured by the reference "
+             "model.")
+    comps: list[dict] = []
+    residuals, stability = {}, {}
+    figures = Section("figures")      # collected apart: they follow the table
+    built: dict[tuple[str, str], object] = {}
+    for name in names:
+        sc = get_scenario(name)
+        model = load_model(sc.model)
+        ref = runs[("reference", name)]
+        here = {lab: runs[(lab, name)] for lab in labels
+                if (lab, name) in runs and runs[(lab, name)].status != "not run"}
+        if "mass_matrix" in sc.compared and ref.t.size:
+            step = max(1, len(ref.t) // M_STATES)
+            engines = {}
+            for lab in labels:
+                if lab != "reference" and (lab, model.name) not in built:
+                    built[(lab, model.name)] = SETUPS[lab].build(model)
+                if lab != "reference":
+                    engines[lab] = built[(lab, model.name)]
+            comps += compare_mass_matrix(name, model, ref.q[::step], engines, tols)
+        if sc.kind == "inverse":
+            for lab, r in here.items():
+                if lab != "reference" and r.status == "completed":
+                    comps += compare_inverse(ref, r, tols)
+            with_T = {k: r for k, r in here.items() if r.T is not None}
+            if with_T:
+                figures.figure(f"{name}_torques.png", "torque_overlay", scenario=name, runs=with_T)
+            continue
+        hor = horizons[name]
+        errors, lines = {}, {}
+        for lab, r in here.items():
+            if "constraint_residual" in sc.compared:
+                comps.append(compare_constraints(model, r, tols))
+            if r.t.size:
+                C = constraint_series(model, r)
+                lines[lab] = (r.t, C[:, 0], C[:, 1:].max(axis=1))
+            if lab == "reference" or "trajectory" not in sc.compared or not r.t.size:
+                continue
+            c, te = compare_forward(model, ref, r, hor, tols)
+            comps += c
+            errors[lab] = (te.t, te.errors.max(axis=1) if te.t.size else te.t)
+        figures.figure(f"{name}_trajectories.png", "trajectory_overlay", scenario=name, runs=here,
+                   errors=errors, horizon=hor.t, threshold=HORIZON_THRESHOLD)
+        residuals[name] = lines
+        if "stability" in sc.tags:
+            for lab, r in here.items():
+                stability.setdefault(lab, {})[name] = (r.t, r.q[:, 3], r.status, r.t_end)
+    if residuals:
+        figures.figure("constraint_residuals.png", "constraint_residuals", panels=residuals,
+                   bound=2e-3)
+    if stability:
+        figures.figure("stability_theta.png", "stability_study", runs=stability)
+    zig = runs.get(("reference", "zigzag"))
+    replays = {lab: (r.t, r.q[:, 3], r.q[:, 6]) for lab in labels
+               if (r := runs.get((lab, "replay"))) is not None and r.t.size}
+    if zig is not None and replays:
+        figures.figure("replay_vs_zigzag.png", "replay_vs_zigzag",
+                   zigzag=(zig.t, zig.q[:, 3], zig.q[:, 6]), replays=replays)
+    sec.comparisons = comps
+    rows = [(c["quantity"], c["scenario"], " vs ".join(c["engines"]), num(c["max_error"]),
+             num(c["tolerance"]), verdict_word(c["passed"], c.get("why", "")),
+             c.get("localized_to", "-")) for c in comps]
+    sec.table(("quantity", "scenario", "engines", "max error", "tolerance", "verdict",
+               "where"), rows,
+              note="Errors are relative to the scale the tolerance names for terms, torques and "
+                   "multipliers; absolute (rad or m) for trajectories; m or m/s for constraint "
+                   f"residuals ({', '.join(CONSTRAINT_NAMES)}).")
+    sec.blocks += figures.blocks
+    return sec
