@@ -74,7 +74,7 @@ h2 { border-bottom: 1px solid #aaa; margin-top: 2.2rem; }
 h1, h2, h3, h4 { scroll-margin-top: .5rem; }
 a.header-anchor { color: #bbb; text-decoration: none; margin-left: .3rem; font-weight: normal; }
 a.header-anchor:hover { color: #333; }
-.table-wrap { overflow-x: auto; margin: .8rem 0; border: 1px solid #ddd; }
+.table-wrap { overflow-x: auto; margin: .8rem 0; max-width: 100%; }
 table { border-collapse: collapse; font-size: 13px; }
 th, td { border: 1px solid var(--rule); padding: 3px 8px; text-align: left; vertical-align: top; }
 th { background: #f0f0f0; position: sticky; top: 0; }
@@ -86,6 +86,8 @@ td.partly { background: #fff4d6 !important; }
 td.info { background: #e8eef8 !important; }
 code { font-family: ui-monospace, "DejaVu Sans Mono", monospace; background: #f3f3f3;
        padding: 0 3px; border-radius: 3px; font-size: 92%; }
+pre { background: #f3f3f3; padding: .6rem .8rem; overflow-x: auto; border-radius: 3px; }
+pre code { background: none; padding: 0; font-size: 13px; }
 img { display: block; width: 100%; max-width: 100%; height: auto; border: 1px solid #ddd;
       margin: .8rem 0; }
 .missing-figure { display: block; color: #900; border: 1px dashed #c66; padding: .4rem .6rem;
