@@ -126,6 +126,12 @@ def test_image_is_embedded_as_a_data_uri(rendered):
     assert re.search(r'img \{[^}]*width: 100%', report_html.CSS), "figures at full width"
 
 
+def test_image_name_with_space_and_accent_is_found(tmp_path):
+    png = _png(tmp_path / "figures" / "ángulo de dirección.png")
+    page = markdown_to_html("![steer](<figures/ángulo de dirección.png>)\n", tmp_path)
+    assert base64.b64encode(png).decode() in page and "missing-figure\"" not in page
+
+
 def test_missing_image_gives_a_visible_note_not_a_crash(tmp_path):
     page = markdown_to_html("# r\n\n![gone](figures/gone.png)\n\n![odd](notes.txt)\n", tmp_path)
     assert '<span class="missing-figure">missing figure figures/gone.png (file not found)' in page

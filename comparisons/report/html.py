@@ -25,6 +25,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import unquote
 
 from markdown_it import MarkdownIt
 from markdown_it.token import Token
@@ -117,7 +118,7 @@ def _image_html(src: str, alt: str, base: Path) -> str:
     """An <img> with the file embedded as a data URI, or a visible note when it cannot be."""
     if src.startswith(("data:", "http://", "https://")):
         return f'<img src="{html.escape(src)}" alt="{html.escape(alt)}">'
-    path = base / src
+    path = base / unquote(src)   # markdown-it percent-encodes the link (spaces, non-ASCII)
     mime = _IMAGE_TYPES.get(path.suffix.lower())
     if mime is None:
         return (f'<span class="missing-figure">figure {html.escape(src)} not embedded: '
