@@ -78,7 +78,7 @@ a.header-anchor:hover { color: #333; }
 .table-wrap { overflow-x: auto; margin: .8rem 0; max-width: 100%; }
 table { border-collapse: collapse; font-size: 13px; }
 th, td { border: 1px solid var(--rule); padding: 3px 8px; text-align: left; vertical-align: top; }
-th { background: #f0f0f0; position: sticky; top: 0; }
+th { background: #f0f0f0; }
 td { font-variant-numeric: tabular-nums; }
 tr:nth-child(even) td { background: #fafafa; }
 td.pass { background: #e3f4e3 !important; }
