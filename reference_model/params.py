@@ -2,7 +2,7 @@
 
 The parameter set is the flat vector shared by every builder (the generated C code reads
 ``p[i]`` in :data:`PARAMETER_NAMES` order). In the thesis notation (see
-``shared/docs/thesis-model.md``), with ``A3``/``A4`` the frame/fork rotation matrices::
+``docs/model.md``), with ``A3``/``A4`` the frame/fork rotation matrices::
 
     rG2 = rC + Ai2 [0, 0, R_rear]          rear hub = CoM of body 2 (rear wheel)
     rG3 = rG2 + A3 [x3, 0, z3]             CoM of body 3 (frame + rider)

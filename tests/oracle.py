@@ -1,7 +1,7 @@
 """An independent numerical oracle of the thesis bicycle: kinematics, energy, constraints.
 
-Plain numpy, written from the thesis description (shared/docs/thesis-model.md and the MATLAB
-listing of the thesis) and SCHEMA_NOTES.md, WITHOUT looking at the reference model's code.
+Plain numpy, written from the model's description (docs/model.md, after the thesis's MATLAB
+listing, chapter 8) and its parameter names, WITHOUT looking at the reference model's code.
 The reference model derives everything symbolically (sympy) and the Newton-Euler way; this
 oracle instead
 
@@ -65,7 +65,7 @@ def params_from(obj) -> SimpleNamespace:
     """Parameters with attribute access, from a mapping or any object with the attributes.
 
     Accepts the reference model's ``Parameters`` dataclass, a dict, or a namespace. Only the
-    names of SCHEMA_NOTES.md are read; each is converted to a float.
+    names of docs/model.md are read; each is converted to a float.
     """
     values = {}
     for name in PARAMETER_NAMES:

@@ -2,7 +2,7 @@
 
 In-process through `comparisons.cli.main([...])` (output captured by capsys), and in a real
 subprocess for the exit status the shell sees. Expected column names, scenario and model
-names come from the thesis description (shared/docs/thesis-model.md) and the CLI's
+names come from the model's description (docs/model.md) and the CLI's
 documented contract, not from the code's own lists.
 """
 

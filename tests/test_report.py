@@ -7,7 +7,6 @@ import re
 import pytest
 
 from comparisons.cli import main
-from comparisons.report.html import markdown_to_html
 from comparisons.judgments.summary import summary_table
 
 VERDICTS = {"reproduced", "not reproduced", "partly", "not assessed"}
@@ -162,10 +161,3 @@ def test_summary_table_groups_by_quantity_and_pair():
     rows = {(r["quantity"], r["engines"]): r for r in summary_table(comps)}
     assert rows[("M", "r vs p")]["max_error"] == 2e-12 and rows[("M", "r vs p")]["verdict"] == "FAIL (1 of 2)"
     assert rows[("M", "r vs e")]["verdict"] == "reported"
-
-
-def test_markdown_to_html_tables_headings_and_escaping(tmp_path):
-    md = "# T\n\ntext with `code` and a <tag>\n\n| a | b |\n|---|---|\n| x \\| y | pass |\n"
-    html = markdown_to_html(md, tmp_path)
-    assert '<h1 id="t">T</h1>' in html and "&lt;tag&gt;" in html and "<code>code</code>" in html
-    assert "<td>x | y</td>" in html and '<td class="pass">pass</td>' in html

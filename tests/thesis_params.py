@@ -1,8 +1,8 @@
 """The thesis parameters, typed in by hand from its MATLAB listing (`din_Bicicleta`).
 
-Source: shared/seed/000_7aed47892d50f5e2.txt, lines 2464-2514 (the values in force in the
+Source: the thesis's MATLAB listing, chapter 8, `din_Bicicleta` (the values in force in the
 dynamics; the one script that writes z3 = 0.55+0.39647 is not the dynamics).  Written in the
-generalised names of SCHEMA_NOTES.md:
+generalised names of docs/model.md:
 
     thesis x4, z4  -> xa, za   (steering-axis point from the rear hub, frame axes)
     thesis (none)  -> dx4 = dz4 = 0   (the fork CoM lies on that point)

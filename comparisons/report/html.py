@@ -1,124 +1,245 @@
-"""report.md -> a self-contained report.html (figures embedded as base64 PNG, inline CSS).
+"""report.md -> one self-contained report.html: rendered by markdown-it-py, with a table of
+contents, an anchor on every heading, figures embedded as data URIs and inline CSS.
 
-The report's markdown uses a small subset (headings, paragraphs, bullet lists, pipe tables,
-images, `code`, **bold**, links), so a converter of ~100 lines does it without a dependency;
-the output opens offline, can be mailed as one file and attached to a CI run.
+Why a library and not a converter of our own: the report's markdown uses GitHub tables whose
+cells escape pipes (``max \\|C\\|``), bold, code spans, links, lists and images; the earlier
+hand-written converter let escapes leak as literal backslashes outside tables. markdown-it-py
+is a maintained CommonMark parser with the GFM table rule, so every escape is resolved the way
+GitHub resolves it. Raw HTML in the markdown is not passed through (it is escaped).
+
+The output opens offline and can be mailed as one file or attached to a CI run: no link to
+any other file is needed to see it (figures are base64 ``data:`` URIs; a figure that is
+missing or of an unknown type is shown as a visible note, never a crash).
+
+Layout: the table of contents (h2 and h3) sits in a side column on a wide screen, so the
+first screen shows the report's own beginning (its verdict and what follows it); on a narrow
+screen or in print it comes first. Wide tables scroll horizontally inside their own wrapper;
+figures take the full content width.
 """
 
 from __future__ import annotations
 
 import base64
 import html
-import re
+import os
+import tempfile
+from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import unquote
+
+from markdown_it import MarkdownIt
+from markdown_it.token import Token
+from mdit_py_plugins.anchors import anchors_plugin
+
+__all__ = ["CSS", "TocEntry", "markdown_to_html", "write_html"]
+
+TOC_LEVELS = (2, 3)   # h2 and h3 in the table of contents (h1 is the report's title)
+
+# image suffix -> MIME type of the data URI; anything else is reported, not embedded
+_IMAGE_TYPES = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg",
+                ".gif": "image/gif", ".svg": "image/svg+xml", ".webp": "image/webp"}
+
+# a table cell whose whole text is a verdict word gets a class (colour); matched on the
+# lower-cased text, "FAIL (2 of 5)" by its first word
+_VERDICT_CLASS = {
+    "pass": "pass", "ok": "pass", "yes": "pass", "holds": "pass", "reproduced": "pass",
+    "detected": "pass", "localized": "pass", "converges": "pass",
+    "fail": "fail", "fails": "fail", "no": "fail", "not reproduced": "fail", "missed": "fail",
+    "detected, mislocalized": "fail", "failed": "fail",
+    "partly": "partly", "inconclusive": "partly",
+    "reported": "info", "not assessed": "info", "not observable": "info",
+    "model difference": "info",
+}
 
 CSS = """
-body { font: 14px/1.45 system-ui, sans-serif; max-width: 1200px; margin: 2em auto; padding: 0 1em; color: #222; }
-h1 { border-bottom: 2px solid #333; } h2 { border-bottom: 1px solid #aaa; margin-top: 2em; }
-table { border-collapse: collapse; margin: .8em 0; font-size: 13px; }
-th, td { border: 1px solid #ccc; padding: 3px 7px; text-align: left; vertical-align: top; }
-th { background: #f0f0f0; } tr:nth-child(even) td { background: #fafafa; }
-td.pass, td.ok { background: #e3f4e3 !important; } td.fail { background: #f8d7d7 !important; font-weight: bold; }
-td.partly, td.info { background: #fff4d6 !important; }
-code { background: #f3f3f3; padding: 0 3px; border-radius: 3px; }
-img { max-width: 100%; border: 1px solid #ddd; margin: .5em 0; display: block; }
+:root { --toc-width: 17rem; --fg: #222; --muted: #666; --rule: #ccc; }
+* { box-sizing: border-box; }
+body { font: 15px/1.5 system-ui, -apple-system, "Segoe UI", sans-serif; color: var(--fg);
+       margin: 0; background: #fff; }
+main { margin-left: var(--toc-width); padding: 1rem 2rem 4rem; max-width: 100rem; }
+nav.toc { position: fixed; top: 0; left: 0; bottom: 0; width: var(--toc-width);
+          overflow-y: auto; padding: 1rem; border-right: 1px solid var(--rule);
+          background: #f7f7f7; font-size: 13px; }
+nav.toc p.toc-title { font-weight: 600; margin: 0 0 .5rem; }
+nav.toc ul { list-style: none; margin: 0; padding-left: 0; }
+nav.toc ul ul { padding-left: 1rem; }
+nav.toc li { margin: .2rem 0; }
+nav.toc a { color: #124; text-decoration: none; }
+nav.toc a:hover { text-decoration: underline; }
+@media (max-width: 900px), print {
+  nav.toc { position: static; width: auto; border-right: 0; border-bottom: 1px solid var(--rule); }
+  main { margin-left: 0; }
+}
+h1 { border-bottom: 2px solid #333; margin-top: .3rem; }
+h2 { border-bottom: 1px solid #aaa; margin-top: 2.2rem; }
+h1, h2, h3, h4 { scroll-margin-top: .5rem; }
+a.header-anchor { color: #bbb; text-decoration: none; margin-left: .3rem; font-weight: normal; }
+a.header-anchor:hover { color: #333; }
+.table-wrap { overflow-x: auto; margin: .8rem 0; max-width: 100%; }
+table { border-collapse: collapse; font-size: 13px; }
+th, td { border: 1px solid var(--rule); padding: 3px 8px; text-align: left; vertical-align: top; }
+th { background: #f0f0f0; }
+td { font-variant-numeric: tabular-nums; }
+tr:nth-child(even) td { background: #fafafa; }
+td.pass { background: #e3f4e3 !important; }
+td.fail { background: #f8d7d7 !important; font-weight: bold; }
+td.partly { background: #fff4d6 !important; }
+td.info { background: #e8eef8 !important; }
+code { font-family: ui-monospace, "DejaVu Sans Mono", monospace; background: #f3f3f3;
+       padding: 0 3px; border-radius: 3px; font-size: 92%; }
+pre { background: #f3f3f3; padding: .6rem .8rem; overflow-x: auto; border-radius: 3px; }
+pre code { background: none; padding: 0; font-size: 13px; }
+img { display: block; width: 100%; max-width: 100%; height: auto; border: 1px solid #ddd;
+      margin: .8rem 0; }
+.missing-figure { display: block; color: #900; border: 1px dashed #c66; padding: .4rem .6rem;
+                  margin: .8rem 0; font-style: italic; }
 """
 
-_VERDICT_CLASS = {"pass": "pass", "reproduced": "pass", "yes": "pass", "holds": "pass",
-                  "detected": "pass", "fail": "fail", "not reproduced": "fail", "no": "fail",
-                  "fails": "fail", "missed": "fail", "partly": "partly", "not assessed": "info",
-                  "reported": "info"}
+
+@dataclass(frozen=True)
+class TocEntry:
+    """One heading of the table of contents."""
+
+    level: int
+    anchor: str
+    text: str
 
 
-def _inline(text: str) -> str:
-    text = html.escape(text, quote=False)
-    text = re.sub(r"`([^`]+)`", r"<code>\1</code>", text)
-    text = re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", text)
-    text = re.sub(r"\[([^\]]+)\]\(([^)]+)\)", r'<a href="\2">\1</a>', text)
-    return text
+def _verdict_class(text: str) -> str | None:
+    words = " ".join(text.split()).lower()
+    if words in _VERDICT_CLASS:
+        return _VERDICT_CLASS[words]
+    if words.startswith("fail ("):       # the summary's "FAIL (2 of 5)"
+        return "fail"
+    return None
 
 
-def _cells(line: str) -> list[str]:
-    body = line.strip()[1:-1] if line.strip().endswith("|") else line.strip()[1:]
-    parts = re.split(r"(?<!\\)\|", body)
-    return [p.strip().replace("\\|", "|") for p in parts]
+def _image_html(src: str, alt: str, base: Path) -> str:
+    """An <img> with the file embedded as a data URI, or a visible note when it cannot be."""
+    if src.startswith(("data:", "http://", "https://")):
+        return f'<img src="{html.escape(src)}" alt="{html.escape(alt)}">'
+    path = base / unquote(src)   # markdown-it percent-encodes the link (spaces, non-ASCII)
+    mime = _IMAGE_TYPES.get(path.suffix.lower())
+    if mime is None:
+        return (f'<span class="missing-figure">figure {html.escape(src)} not embedded: '
+                f'unknown image type {html.escape(path.suffix or "(no suffix)")}</span>')
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        reason = "file not found" if isinstance(exc, FileNotFoundError) else exc.strerror
+        return (f'<span class="missing-figure">missing figure {html.escape(src)} '
+                f'({html.escape(str(reason))})</span>')
+    encoded = base64.b64encode(data).decode("ascii")
+    return f'<img src="data:{mime};base64,{encoded}" alt="{html.escape(alt)}">'
 
 
-def _image(alt: str, src: str, base: Path) -> str:
-    path = base / src
-    if path.is_file():
-        data = base64.b64encode(path.read_bytes()).decode("ascii")
-        return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">'
-    return f"<p><em>missing figure {html.escape(src)}</em></p>"
+def _parser(base: Path) -> MarkdownIt:
+    """CommonMark + GFM tables, raw HTML escaped, anchors on every heading, our render rules."""
+    md = MarkdownIt("commonmark", {"html": False}).enable(["table", "strikethrough"])
+    anchors_plugin(md, min_level=1, max_level=6, permalink=True, permalinkSymbol="#")
+
+    def image(self, tokens: list[Token], idx: int, options, env) -> str:
+        token = tokens[idx]
+        alt = self.renderInlineAsText(token.children or [], options, env)
+        return _image_html(str(token.attrGet("src") or ""), alt, base)
+
+    def table_open(self, tokens, idx, options, env) -> str:
+        return '<div class="table-wrap">\n' + self.renderToken(tokens, idx, options, env)
+
+    def table_close(self, tokens, idx, options, env) -> str:
+        return self.renderToken(tokens, idx, options, env) + "</div>\n"
+
+    def td_open(self, tokens, idx, options, env) -> str:
+        inline = tokens[idx + 1] if idx + 1 < len(tokens) else None
+        cls = _verdict_class(inline.content) if inline is not None and inline.type == "inline" else None
+        if cls:
+            tokens[idx].attrSet("class", cls)
+        return self.renderToken(tokens, idx, options, env)
+
+    md.add_render_rule("image", image)
+    md.add_render_rule("table_open", table_open)
+    md.add_render_rule("table_close", table_close)
+    md.add_render_rule("td_open", td_open)
+    return md
+
+
+def _toc(tokens: list[Token]) -> list[TocEntry]:
+    """The h2/h3 headings in document order, with the anchors the plugin gave them."""
+    out = []
+    for i, tok in enumerate(tokens):
+        if tok.type != "heading_open" or int(tok.tag[1:]) not in TOC_LEVELS:
+            continue
+        text, in_permalink = [], False
+        for child in tokens[i + 1].children or []:
+            if child.type == "link_open" and child.attrGet("class") == "header-anchor":
+                in_permalink = True
+            elif child.type == "link_close" and in_permalink:
+                in_permalink = False
+            elif not in_permalink and child.type in ("text", "code_inline"):
+                text.append(child.content)
+        out.append(TocEntry(int(tok.tag[1:]), str(tok.attrGet("id")), "".join(text).strip()))
+    return out
+
+
+def _toc_html(entries: list[TocEntry]) -> str:
+    """Nested list: h3 entries inside the h2 before them."""
+    if not entries:
+        return ""
+    parts = ['<nav class="toc" aria-label="Contents"><p class="toc-title">Contents</p><ul>']
+    open_sub = False
+    for k, e in enumerate(entries):
+        link = f'<a href="#{html.escape(e.anchor)}">{html.escape(e.text)}</a>'
+        if e.level == TOC_LEVELS[0]:
+            if open_sub:
+                parts.append("</ul></li>")
+                open_sub = False
+            elif k:
+                parts.append("</li>")
+            parts.append(f"<li>{link}")
+        else:
+            if not open_sub:
+                parts.append("<ul>" if k else "<li><ul>")
+                open_sub = True
+            parts.append(f"<li>{link}</li>")
+    parts.append("</ul></li>" if open_sub else "</li>")
+    parts.append("</ul></nav>")
+    return "".join(parts)
 
 
 def markdown_to_html(markdown: str, base: Path, title: str = "bicycle-xval report") -> str:
-    """Convert the report's markdown; images are read from ``base`` and embedded."""
-    out, para, items = [], [], []
-    lines = markdown.splitlines()
+    """Render the report's markdown as one self-contained HTML page.
 
-    def flush():
-        if para:
-            out.append(f"<p>{_inline(' '.join(para))}</p>")
-            para.clear()
-        if items:
-            out.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in items) + "</ul>")
-            items.clear()
-
-    i = 0
-    while i < len(lines):
-        line = lines[i]
-        img = re.fullmatch(r"!\[([^\]]*)\]\(([^)]+)\)", line.strip())
-        if not line.strip():
-            flush()
-        elif line.startswith("#"):
-            flush()
-            level = len(line) - len(line.lstrip("#"))
-            text = line[level:].strip()
-            anchor = re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
-            out.append(f'<h{level} id="{anchor}">{_inline(text)}</h{level}>')
-        elif img:
-            flush()
-            out.append(_image(img.group(1), img.group(2), base))
-        elif line.lstrip().startswith("|"):
-            flush()
-            block = []
-            while i < len(lines) and lines[i].lstrip().startswith("|"):
-                block.append(lines[i])
-                i += 1
-            out.append(_table(block))
-            continue
-        elif line.startswith("- "):
-            if para:
-                flush()
-            items.append(line[2:])
-        elif items and line.startswith("  "):
-            items[-1] += " " + line.strip()
-        else:
-            para.append(line.strip())
-        i += 1
-    flush()
-    return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>{html.escape(title)}</title><style>{CSS}</style></head><body>\n"
-            + "\n".join(out) + "\n</body></html>\n")
-
-
-def _table(block: list[str]) -> str:
-    header = _cells(block[0])
-    rows = [_cells(b) for b in block[2:]] if len(block) > 1 and set(block[1].replace("|", "").strip()) <= set("-: ") else [_cells(b) for b in block[1:]]
-    head = "".join(f"<th>{_inline(h)}</th>" for h in header)
-    body = []
-    for r in rows:
-        tds = []
-        for c in r:
-            cls = _VERDICT_CLASS.get(c.strip().lower())
-            tds.append(f'<td class="{cls}">{_inline(c)}</td>' if cls else f"<td>{_inline(c)}</td>")
-        body.append("<tr>" + "".join(tds) + "</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+    ``base`` is the folder relative to which image paths are read (the report's folder); each
+    image is embedded as a data URI. The page has a table of contents of the h2 and h3
+    headings, each linking to the anchor (``id``) the heading carries."""
+    md = _parser(Path(base))
+    env: dict = {}
+    tokens = md.parse(markdown, env)
+    body = md.renderer.render(tokens, md.options, env)
+    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
+            "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+            f"<title>{html.escape(title)}</title>\n<style>{CSS}</style></head>\n<body>\n"
+            f"{_toc_html(_toc(tokens))}\n<main>\n{body}</main>\n</body></html>\n")
 
 
 def write_html(report_md: Path) -> Path:
-    """report.md -> report.html next to it."""
+    """report.md -> report.html beside it (UTF-8), written atomically: a temporary file in
+    the same folder, then ``os.replace``, so a reader never sees half a page."""
+    report_md = Path(report_md)
+    try:
+        markdown = report_md.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{report_md}: no such report; run `bicycle-xval run --out "
+                                f"{report_md.parent}` first") from None
+    page = markdown_to_html(markdown, report_md.parent)
     out = report_md.with_suffix(".html")
-    out.write_text(markdown_to_html(report_md.read_text(), report_md.parent))
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(page)
+        os.chmod(tmp, 0o644)   # mkstemp makes it private; a report is for reading
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
     return out

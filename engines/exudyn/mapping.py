@@ -2,7 +2,7 @@
 
 Forward (``body_states``): q, dq -> CoM positions, rotation matrices, CoM velocities and
 angular velocities (global) of bodies 2..5, written directly from the thesis's kinematics
-(see shared/docs/thesis-model.md; the parameters are the `Parameters` of the model):
+(see docs/model.md; the parameters are the `Parameters` of the model):
 
     Ai2 = Rz(phi) Rx(theta)    A2 = Ai2 Ry(psi)    A3 = Ai2 Ry(beta)
     A4 = A3 Rz(gamma)          A5 = A4 Ry(eps)
