@@ -195,7 +195,8 @@ def _triangle_violations(values: Mapping[str, float], prefix: str) -> list[tuple
         for i in range(3):
             others = moments[(i + 1) % 3] + moments[(i + 2) % 3]
             if others < moments[i] - _TRIANGLE_RTOL * max(moments):
-                keys = [k for k in dict.fromkeys((kxx, kyy, kzz, kxz)) if k is not None]
+                # y is a principal axis; the other two moments come from the x-z block
+                keys = [kyy] if i == 1 else [k for k in dict.fromkeys((kxx, kzz, kxz)) if k]
                 found.append((", ".join(prefix + k for k in keys),
                               f"inertia of the {_BODY[body]} violates the triangle inequality "
                               f"of principal moments by {moments[i] / others - 1.0:.2%}: "
@@ -539,10 +540,10 @@ def float_text(value: float) -> str:
 
 
 def toml_text(
-    t: Table1 = TABLE1,
+    t: Table1 | Mapping[str, Any],
     *,
-    name: str = "benchmark",
-    source: str = "Meijaard, Papadopoulos, Ruina, Schwab, Proc. R. Soc. A 463 (2007) 1955-1982, Table 1",
+    name: str,
+    source: str,
     description: str | None = None,
     generator: str = "`python -m reference_model.benchmark --write`",
     uncertainties: Mapping[str, float] | None = None,
@@ -552,7 +553,8 @@ def toml_text(
     with the formulas as comments, contact "disc" written out, ``[checks] triangle = "warn"``
     if ``allow_triangle_violation``, and ``t`` itself in ``[benchmark]`` (with ``uncertainties``,
     dropped on import, as comments). ``name`` and ``source`` (a bibliographic source or the
-    path of the file imported) go into ``[model]``; nothing depends on the date.
+    path of the file imported) are required (a file never takes another bicycle's name) and
+    go into ``[model]``; nothing depends on the date.
     Raises like :func:`parameters_from_benchmark` for values it cannot load back."""
     params = parameters_from_benchmark(t, name=name, source=source,
                                        allow_triangle_violation=allow_triangle_violation)
@@ -609,6 +611,7 @@ def _file_values(path) -> dict[str, float]:
     return {n: data[PARAMETER_GROUPS[n]][n]["value"] for n in PARAMETER_NAMES}
 
 
+_NAMED_SOURCE = "Meijaard, Papadopoulos, Ruina, Schwab, Proc. R. Soc. A 463 (2007) 1955-1982, Table 1"
 _NAMED_DESCRIPTION = ("Meijaard et al. (2007) benchmark bicycle: raked steering axis "
                       "(lambda = pi/10), trail 0.08 m, wheels 0.3 m / 0.35 m, front assembly CoM "
                       "off the axis, no drag")
@@ -616,7 +619,8 @@ _NAMED_DESCRIPTION = ("Meijaard et al. (2007) benchmark bicycle: raked steering 
 
 def named_model_text() -> str:
     """The text of ``benchmark.toml`` (the named model "benchmark": Table 1 itself)."""
-    return toml_text(TABLE1, description=_NAMED_DESCRIPTION)
+    return toml_text(TABLE1, name="benchmark", source=_NAMED_SOURCE,
+                     description=_NAMED_DESCRIPTION)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
