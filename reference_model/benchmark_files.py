@@ -230,9 +230,13 @@ def write_import(
     """Import ``path`` and write the parameter file ``out`` (atomically). The written text is
     loaded back before it is written and must give the same model (values, name, contact,
     triangle mode, Table 1). Returns the loaded parameters (``source`` = ``out``)."""
+    out = Path(out)
+    if out.suffix.lower() != ".toml":
+        raise ParameterError(str(out), "(output)", "the imported parameter file must be .toml "
+                             f"(a {out.suffix or 'suffix-less'} file would not load as one)",
+                             f"name it e.g. {out.with_suffix('.toml').name}")
     imported = import_benchmark(path, name=name, allow_triangle_violation=allow_triangle_violation,
                                 description=description)
-    out = Path(out)
     loaded = parameters_from_mapping(tomllib.loads(imported.text), source=str(out),
                                      default_name=out.stem)
     expected = imported.params.replace(source=str(out))

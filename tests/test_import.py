@@ -288,6 +288,9 @@ def test_failure1_the_file_is_named_after_its_source_not_benchmark(tmp_path):
     assert load_model(write_import(src, tmp_path / "x.toml").source).name == "Perturbed3Benchmark"
     with pytest.raises(TypeError):
         toml_text(Table1(w=1.1))                                    # no default name to inherit
+    with pytest.raises(ParameterError, match=r"mine\.txt: \(output\): .*must be \.toml"):
+        write_import(src, tmp_path / "mine.txt")
+    assert not (tmp_path / "mine.txt").exists()
 
 
 def test_failure2_numpy_scalars_write_plain_floats(tmp_path):
