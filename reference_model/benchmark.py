@@ -6,9 +6,12 @@ equations for the balance and steer of a bicycle: a benchmark and review", Proc.
 y to the right, origin at the rear contact point in the upright reference configuration. The
 reference model (thesis notation, ``params.PARAMETER_NAMES``) uses x forward, **z up**, y to
 the left, and measures every length in the frame's or the fork's own axes. This module holds
-Table 1 (:data:`TABLE1`) and the formulas from it to the model's parameters
-(:func:`reference_parameters`); ``reference_model/parameters/benchmark.toml`` is their output
-(``python -m reference_model.benchmark --write`` regenerates it, ``--check`` compares).
+Table 1 (:data:`TABLE1`), the formulas from it to the model's parameters
+(:func:`reference_parameters`, :func:`parameters_from_benchmark`, the writer :func:`toml_text`)
+and back (:func:`to_benchmark`); ``reference_model/parameters/benchmark.toml`` is their output
+for Table 1 (``python -m reference_model.benchmark --write`` regenerates it, ``--check``
+compares). Any other bicycle given by Table 1's 26 names goes through the same functions
+(files: ``reference_model.benchmark_files``).
 
 Formulas (``c = cos(lambda)``, ``s = sin(lambda)``; positions in the model's global axes at
 upright, z up, origin at the rear contact; "frame components" of a vector d are
@@ -39,8 +42,25 @@ upright, z up, origin at the rear contact; "frame components" of a vector d are
   ``I'xx = c^2 Ixx + 2 c s Ixz + s^2 Izz``, ``I'zz = s^2 Ixx - 2 c s Ixz + c^2 Izz``,
   ``I'xz = c s (Izz - Ixx) + (c^2 - s^2) Ixz``, ``I'yy = Iyy``; the fork's axes equal the
   frame's at zero steer.
-* ``g = 9.81``, ``cv = 0`` (the benchmark has no drag). Front contact model ``disc`` (the true
-  lowest point of the front wheel, as the benchmark's knife-edge wheel).
+* ``g`` = Table 1's g, ``cv = 0`` (the benchmark has no drag). Front contact model ``disc`` (the
+  true lowest point of the front wheel, as the benchmark's knife-edge wheel): it is part of
+  what :func:`reference_parameters` returns, so no model is ever built from benchmark
+  parameters with an implicit contact.
+
+**The reverse** (:func:`to_benchmark`), for a model with disc contact, no drag and wheels with
+``Izz = Ixx``: the upright pitch beta solves ``R_rear - (xa + x5) sin(beta) + (za + z5) cos(beta)
+= R_front`` (hub above the disc's lowest point; the root of smallest ``|beta|``), ``lambda =
+-beta``; every point back in global axes, ``w`` = the front hub's x, the trail from where the
+steering axis (through A along z3) meets the ground, the tensors rotated back (the formulas
+above with ``s -> -s``) and their xz products flipped to z down. A model that carries its Table
+1 (``Parameters.benchmark``, from an import or a ``[benchmark]`` table) gets those values back
+exactly, once they are checked to reproduce the model's values.
+
+**Checks on Table 1** (:class:`Table1` validates on construction, naming Table 1's keys):
+finite reals; ``w, rR, rF, g`` and the masses > 0; ``|lam| < pi/2``; each body's tensor
+(``IR = diag(IRxx, IRyy, IRxx)``, ``IB``, ``IH``, ``IF`` likewise) positive definite. The
+triangle inequality of principal moments is checked when building the model: an error naming
+the Table 1 keys in "strict" mode, a warning carried by the model in "warn" mode.
 
 Values are written with ``repr``: the shortest decimal that reads back as the same double (at
 most 17 significant digits), so the file reproduces these formulas bit for bit.
@@ -49,17 +69,140 @@ most 17 significant digits), so the file reproduces these formulas bit for bit.
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import decimal
+import json
 import math
+import numbers
 import sys
 import tomllib
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
+from typing import Any
 
-from .params import (BENCHMARK_FILE, PARAMETER_DESCRIPTIONS, PARAMETER_GROUPS, PARAMETER_NAMES,
-                     PARAMETER_UNITS)
+from .params import (BENCHMARK_FILE, MEMORY_SOURCE, PARAMETER_DESCRIPTIONS, PARAMETER_GROUPS,
+                     PARAMETER_NAMES, PARAMETER_UNITS, ParameterError, Parameters,
+                     TriangleInequalityError, _closest, _principal_moments)
 
-__all__ = ["BENCHMARK_FILE", "TABLE1", "Table1", "reference_parameters", "toml_text"]
+__all__ = [
+    "BENCHMARK_DESCRIPTIONS", "BENCHMARK_FILE", "BENCHMARK_NAMES", "TABLE1", "Table1",
+    "attach_benchmark", "parameters_from_benchmark", "reference_parameters",
+    "table1_from_mapping", "to_benchmark", "toml_text",
+]
 
+#: Module holding the formulas, named in every file it writes.
+FORMULAS_MODULE = "reference_model.benchmark (reference_model/benchmark.py)"
+
+#: Table 1's 26 names -> meaning (benchmark axes: x forward, z down; SI units, lam in rad).
+BENCHMARK_DESCRIPTIONS: dict[str, str] = {
+    "w": "wheel base, m",
+    "c": "trail, m",
+    "lam": "steer axis tilt from vertical (pi/2 - head angle), rad",
+    "g": "gravity, m/s^2",
+    "rR": "rear wheel radius, m",
+    "mR": "rear wheel mass, kg",
+    "IRxx": "rear wheel diametral inertia (= IRzz), kg m^2",
+    "IRyy": "rear wheel polar inertia, kg m^2",
+    "xB": "rear body + rider CoM, forward, m",
+    "zB": "rear body + rider CoM, z down, m",
+    "mB": "rear body + rider mass, kg",
+    "IBxx": "rear body inertia xx, kg m^2",
+    "IByy": "rear body inertia yy, kg m^2",
+    "IBzz": "rear body inertia zz, kg m^2",
+    "IBxz": "rear body inertia xz (z-down tensor entry), kg m^2",
+    "xH": "front assembly (fork + handlebar) CoM, forward, m",
+    "zH": "front assembly CoM, z down, m",
+    "mH": "front assembly mass, kg",
+    "IHxx": "front assembly inertia xx, kg m^2",
+    "IHyy": "front assembly inertia yy, kg m^2",
+    "IHzz": "front assembly inertia zz, kg m^2",
+    "IHxz": "front assembly inertia xz (z-down tensor entry), kg m^2",
+    "rF": "front wheel radius, m",
+    "mF": "front wheel mass, kg",
+    "IFxx": "front wheel diametral inertia (= IFzz), kg m^2",
+    "IFyy": "front wheel polar inertia, kg m^2",
+}
+BENCHMARK_NAMES: tuple[str, ...] = tuple(BENCHMARK_DESCRIPTIONS)
+
+_POSITIVE = ("w", "rR", "rF", "g", "mR", "mB", "mH", "mF")
+# body letter -> (xx, yy, zz, xz or None): the wheels' zz is their xx (axisymmetric)
+_TENSORS: dict[str, tuple[str, str, str, str | None]] = {
+    "R": ("IRxx", "IRyy", "IRxx", None),
+    "B": ("IBxx", "IByy", "IBzz", "IBxz"),
+    "H": ("IHxx", "IHyy", "IHzz", "IHxz"),
+    "F": ("IFxx", "IFyy", "IFxx", None),
+}
+_BODY = {"R": "rear wheel", "B": "rear body + rider", "H": "front assembly", "F": "front wheel"}
+_TRIANGLE_RTOL = 1e-12      # as the model's check (params._TRIANGLE_RTOL): rounding, not physics
+
+
+def _real(file: str, key: str, value: object) -> float:
+    """A finite real number (NumPy scalars, ints, Fractions, Decimals) as a Python float."""
+    fix = "write a finite real number, e.g. 1.02"
+    if isinstance(value, bool) or type(value).__name__ == "bool_":
+        raise ParameterError(file, key, f"value {value!r} is a boolean, not a number", fix)
+    if isinstance(value, str):
+        raise ParameterError(file, key, f"value {value!r} is a string, not a number",
+                             "remove the quotes" if _is_number_text(value) else fix)
+    if not isinstance(value, (numbers.Real, decimal.Decimal)):
+        raise ParameterError(file, key, f"value {value!r} of type {type(value).__name__} is not "
+                                        "a real number", fix)
+    number = float(value)
+    if not math.isfinite(number):
+        raise ParameterError(file, key, f"value {number!r} is not a finite real number", fix)
+    return number
+
+
+def _is_number_text(text: str) -> bool:
+    try:
+        return math.isfinite(float(text))
+    except ValueError:
+        return False
+
+
+def _validate(values: Mapping[str, float], file: str, prefix: str) -> None:
+    """Signs, the head angle, positive definite tensors (hard errors, Table 1 keys named)."""
+    for n in _POSITIVE:
+        if not values[n] > 0.0:
+            raise ParameterError(file, prefix + n, f"{n} = {values[n]!r} must be > 0 "
+                                 f"({BENCHMARK_DESCRIPTIONS[n]})", f"use a positive {n}")
+    if not abs(values["lam"]) < math.pi / 2:
+        raise ParameterError(file, prefix + "lam", f"lam = {values['lam']!r} rad is not a steer "
+                             "axis tilt in (-pi/2, pi/2)",
+                             "give lam in radians (pi/2 - head angle), e.g. 0.3141592653589793")
+    for body, (kxx, kyy, kzz, kxz) in _TENSORS.items():
+        bad = [k for k in dict.fromkeys((kxx, kyy, kzz)) if not values[k] > 0.0]
+        if bad:
+            raise ParameterError(file, ", ".join(prefix + k for k in bad),
+                                 f"inertia of the {_BODY[body]} is not positive definite: "
+                                 + ", ".join(f"{k} = {values[k]!r}" for k in bad),
+                                 "use positive moments of inertia in kg m^2")
+        if kxz is not None and not values[kxx] * values[kzz] - values[kxz] ** 2 > 0.0:
+            raise ParameterError(
+                file, ", ".join(prefix + k for k in (kxz, kxx, kzz)),
+                f"inertia of the {_BODY[body]} is not positive definite: {kxz}^2 = "
+                f"{values[kxz] ** 2!r} >= {kxx}*{kzz} = {values[kxx] * values[kzz]!r}",
+                f"make |{kxz}| < sqrt({kxx}*{kzz}) = {math.sqrt(values[kxx] * values[kzz]):.6g} "
+                "kg m^2 (check its sign and units)")
+
+
+def _triangle_violations(values: Mapping[str, float], prefix: str) -> list[tuple[str, str]]:
+    """(keys, problem) for each body whose principal moments break I1 + I2 >= I3."""
+    found = []
+    for body, (kxx, kyy, kzz, kxz) in _TENSORS.items():
+        xz = values[kxz] if kxz is not None else 0.0
+        moments = _principal_moments(values[kxx], values[kyy], values[kzz], xz)
+        for i in range(3):
+            others = moments[(i + 1) % 3] + moments[(i + 2) % 3]
+            if others < moments[i] - _TRIANGLE_RTOL * max(moments):
+                # y is a principal axis; the other two moments come from the x-z block
+                keys = [kyy] if i == 1 else [k for k in dict.fromkeys((kxx, kzz, kxz)) if k]
+                found.append((", ".join(prefix + k for k in keys),
+                              f"inertia of the {_BODY[body]} violates the triangle inequality "
+                              f"of principal moments by {moments[i] / others - 1.0:.2%}: "
+                              f"{moments[i]!r} > {others!r} (sum of the other two; principal "
+                              f"moments {tuple(round(m, 12) for m in moments)} kg m^2)"))
+    return found
 
 
 @dataclass(frozen=True)
@@ -68,6 +211,8 @@ class Table1:
 
     Inertia tensors are about the body's CoM in the benchmark's global axes at upright;
     ``IB``/``IH`` are given by their non-zero entries (``xz`` is the tensor entry, as printed).
+    Any real numbers are accepted and kept as Python floats (a NumPy scalar never reaches a
+    written file); construction validates (module docstring, "Checks on Table 1").
     """
 
     w: float = 1.02                 # wheel base, m
@@ -97,8 +242,54 @@ class Table1:
     IFxx: float = 0.1405            # front wheel diametral inertia (= IFzz), kg m^2
     IFyy: float = 0.28              # front wheel polar inertia, kg m^2
 
+    def __post_init__(self) -> None:
+        values = {n: _real(MEMORY_SOURCE, n, getattr(self, n)) for n in BENCHMARK_NAMES}
+        for n, v in values.items():
+            object.__setattr__(self, n, v)
+        _validate(values, MEMORY_SOURCE, "")
+
+    def as_dict(self) -> dict[str, float]:
+        """The 26 values by Table 1 name, in Table 1's order."""
+        return {n: getattr(self, n) for n in BENCHMARK_NAMES}
+
 
 TABLE1 = Table1()
+
+
+def table1_from_mapping(
+    mapping: Mapping[str, Any] | Table1, *, source: str = MEMORY_SOURCE, prefix: str = ""
+) -> Table1:
+    """Validate a mapping of Table 1's 26 names to real numbers (or a Table1) into a Table1.
+
+    Errors name ``source`` and the key (``prefix + name``, e.g. ``benchmark.w`` in a parameter
+    file's ``[benchmark]`` table): not a mapping, unknown names (with the closest valid one),
+    missing names, values that are not finite reals, and the checks of :class:`Table1`.
+    """
+    file = str(source)
+    if isinstance(mapping, Table1):
+        return mapping
+    if not isinstance(mapping, Mapping):
+        raise ParameterError(file, prefix.rstrip(".") or "(benchmark)",
+                             f"expected a mapping of Table 1 names to numbers, got "
+                             f"{type(mapping).__name__}",
+                             "give w, c, lam, g, rR, ... as name = value pairs")
+    for key in mapping:
+        if key not in BENCHMARK_DESCRIPTIONS:
+            hint = _closest(str(key), BENCHMARK_NAMES)
+            raise ParameterError(file, f"{prefix}{key}", f"unknown benchmark parameter {key!r}",
+                                 (f"did you mean {hint!r}? " if hint else "remove it; ")
+                                 + "Table 1's names are " + ", ".join(BENCHMARK_NAMES))
+    missing = [n for n in BENCHMARK_NAMES if n not in mapping]
+    if missing:
+        raise ParameterError(file, ", ".join(prefix + n for n in missing),
+                             f"{len(missing)} of Table 1's 26 parameters missing: "
+                             + ", ".join(missing),
+                             "add " + "; ".join(f"{n} ({BENCHMARK_DESCRIPTIONS[n]})"
+                                                for n in missing[:3])
+                             + ("; ..." if len(missing) > 3 else ""))
+    values = {n: _real(file, prefix + n, mapping[n]) for n in BENCHMARK_NAMES}
+    _validate(values, file, prefix)
+    return Table1(**values)
 
 
 def _frame_components(dx: float, dz: float, c: float, s: float) -> tuple[float, float]:
@@ -114,8 +305,8 @@ def _frame_inertia(xx: float, zz: float, xz_down: float, c: float, s: float) -> 
             c * s * (zz - xx) + (c * c - s * s) * xz)
 
 
-def reference_parameters(t: Table1 = TABLE1) -> dict[str, float]:
-    """The model's parameters (``PARAMETER_NAMES`` order, SI) from Table 1 (module docstring)."""
+def _model_values(t: Table1) -> dict[str, float]:
+    """The model's 30 parameters (``PARAMETER_NAMES`` order, SI) from Table 1."""
     c, s = math.cos(t.lam), math.sin(t.lam)
     x3, z3 = _frame_components(t.xB, -t.zB - t.rR, c, s)
     e = t.rF * s - t.c * c                                   # fork offset
@@ -140,6 +331,176 @@ def reference_parameters(t: Table1 = TABLE1) -> dict[str, float]:
     assert tuple(values) == PARAMETER_NAMES
     return values
 
+
+def reference_parameters(t: Table1 = TABLE1) -> dict[str, Any]:
+    """Keyword arguments of :class:`Parameters` for Table 1: the model's 30 values
+    (``PARAMETER_NAMES`` order, SI; module docstring), then ``contact="disc"`` (the benchmark's
+    knife-edge wheel) and ``benchmark=t`` (provenance), so ``Parameters(**reference_parameters(t))``
+    is the benchmark bicycle with its own contact model, never the thesis's by default."""
+    return {**_model_values(t), "contact": "disc", "benchmark": t}
+
+
+def parameters_from_benchmark(
+    mapping: Mapping[str, Any] | Table1,
+    *,
+    name: str = "custom",
+    source: str = MEMORY_SOURCE,
+    allow_triangle_violation: bool = False,
+) -> Parameters:
+    """The model (contact "disc") of a bicycle given by Table 1's 26 names (any real numbers).
+
+    The triangle inequality is an error naming Table 1's keys unless
+    ``allow_triangle_violation``: then the model carries it in ``warnings``. Every problem
+    raises one :class:`ParameterError` naming ``source`` and the key.
+    """
+    table = table1_from_mapping(mapping, source=source)
+    violations = _triangle_violations(table.as_dict(), "")
+    if violations and not allow_triangle_violation:
+        keys, problem = violations[0]
+        raise TriangleInequalityError(
+            str(source), keys, problem,
+            "check the values and units; if they are measured and right, allow it with "
+            "allow_triangle_violation=True (bicycle-xval import --allow-triangle-violation)")
+    return Parameters(**_model_values(table), name=name, contact="disc", source=str(source),
+                      triangle="warn" if allow_triangle_violation else "strict", benchmark=table)
+
+
+# -- provenance: a model that carries its Table 1 ---------------------------------------------
+
+# The model's values computed again from a stored Table 1 must agree to rounding: per parameter,
+# |difference| <= _CONSISTENCY_RTOL * scale, the scale being the largest magnitude among the
+# values the formula combines (all lengths; one body's tensor entries; the value itself for the
+# copied masses, radii, g). The formulas take a handful of roundings (measured <= 3 ulp on
+# Table 1) and a platform's cos/sin may differ by an ulp, so 1e-14 (~45 ulp) never refuses a
+# file written by this module, while any edit of a value in the file (>= 1e-12 relative for
+# 12 significant digits) is caught.
+_CONSISTENCY_RTOL = 1e-14
+
+
+def _scales(values: Mapping[str, float]) -> dict[str, float]:
+    lengths = max(abs(values[n]) for n in PARAMETER_NAMES[:10])
+    out = {n: lengths for n in PARAMETER_NAMES[:10]}
+    for body in (3, 4):
+        keys = [f"I{body}{a}" for a in ("xx", "yy", "zz", "xz")]
+        out.update(dict.fromkeys(keys, max(abs(values[k]) for k in keys)))
+    for n in PARAMETER_NAMES:
+        out.setdefault(n, abs(values[n]))
+    return out
+
+
+def _inconsistency(params: Parameters, table: Table1) -> tuple[str, float, float] | None:
+    """The first model parameter not reproduced by ``table`` (name, file, formula), or None."""
+    expected = _model_values(table)
+    have = {n: getattr(params, n) for n in PARAMETER_NAMES}
+    scales = _scales(have)
+    for n in PARAMETER_NAMES:
+        if abs(have[n] - expected[n]) > _CONSISTENCY_RTOL * scales[n]:
+            return n, have[n], expected[n]
+    return None
+
+
+def attach_benchmark(params: Parameters, mapping: Mapping[str, Any], *, key: str = "benchmark") -> Parameters:
+    """``params`` with the Table 1 of a parameter file's ``[benchmark]`` table attached, after
+    checking that the model's values follow from it (to rounding: ``_CONSISTENCY_RTOL``)."""
+    table = table1_from_mapping(mapping, source=params.source, prefix=f"{key}.")
+    bad = _inconsistency(params, table)
+    if bad is not None:
+        n, found, expected = bad
+        raise ParameterError(
+            params.source, f"{PARAMETER_GROUPS[n]}.{n}",
+            f"{n} = {found!r} does not follow from the [{key}] table ({expected!r} by "
+            f"{FORMULAS_MODULE}): the file is not true to its source",
+            f"regenerate the file from its benchmark parameters (bicycle-xval import), or remove "
+            f"the [{key}] table if the model's values were changed on purpose")
+    return dataclasses.replace(params, benchmark=table)
+
+
+# -- the reverse ------------------------------------------------------------------------------
+
+
+def _upright_pitch(p: Parameters) -> float | None:
+    """beta at upright with disc contact: R_rear - a sin(beta) + b cos(beta) = R_front, with
+    (a, b) the front hub from the rear hub in frame axes; the root of smallest |beta|."""
+    a, b = p.xa + p.x5, p.za + p.z5
+    rho, k = math.hypot(a, b), p.R_front - p.R_rear
+    if not abs(k) <= rho:
+        return None
+    phi, delta = math.atan2(a, b), math.acos(k / rho)
+    roots = [math.remainder(-phi + sgn * delta, 2.0 * math.pi) for sgn in (1.0, -1.0)]
+    return min(roots, key=abs)
+
+
+def _blockers(p: Parameters, beta: float | None) -> list[str]:
+    out = []
+    if p.contact != "disc":
+        out.append(f"model.contact = {p.contact!r} (the benchmark's front wheel is a knife edge "
+                   "touching the ground at its lowest point: contact 'disc')")
+    if p.cv != 0.0:
+        out.append(f"environment.cv = {p.cv!r} kg/m (the benchmark has no drag)")
+    for body, wheel in ((2, "rear"), (5, "front")):
+        if getattr(p, f"I{body}zz") != getattr(p, f"I{body}xx"):
+            out.append(f"inertia.I{body}zz = {getattr(p, f'I{body}zz')!r} differs from "
+                       f"inertia.I{body}xx = {getattr(p, f'I{body}xx')!r} (Table 1's {wheel} "
+                       "wheel has Izz = Ixx)")
+    if beta is None:
+        out.append("geometry: the front wheel cannot touch the ground with the frame upright "
+                   "(no upright pitch beta)")
+    elif not abs(beta) < math.pi / 2:
+        out.append(f"geometry: upright pitch beta = {beta!r} rad gives no steer axis tilt in "
+                   "(-pi/2, pi/2)")
+    return out
+
+
+def to_benchmark(params: Parameters) -> dict[str, float]:
+    """Table 1's 26 values (``BENCHMARK_NAMES`` order, SI) of a model with a benchmark
+    counterpart (contact "disc", ``cv = 0``, wheels with ``Izz = Ixx``).
+
+    A model built from Table 1 values (import, ``[benchmark]`` table) returns them exactly,
+    once checked to reproduce its parameters; otherwise the reverse formulas of the module
+    docstring (exact to rounding). Raises one :class:`ParameterError` listing every parameter
+    without a benchmark counterpart otherwise.
+    """
+    beta = _upright_pitch(params)
+    blockers = _blockers(params, beta)
+    if blockers:
+        raise ParameterError(params.source, "(benchmark export)",
+                             f"model {params.name!r} has no Meijaard et al. (2007) benchmark "
+                             "counterpart: " + "; ".join(blockers),
+                             "export a model with contact 'disc', cv = 0 and wheels with "
+                             "Izz = Ixx (e.g. params.replace(cv=0.0).with_contact('disc'))")
+    if params.benchmark is not None and _inconsistency(params, params.benchmark) is None:
+        return params.benchmark.as_dict()
+    p = params
+    lam = -beta
+    c, s = math.cos(lam), math.sin(lam)
+
+    def point(px: float, pz: float) -> tuple[float, float]:     # frame comps -> (x, z down)
+        return c * px - s * pz, -(p.R_rear + s * px + c * pz)
+
+    def tensor(xx: float, zz: float, xz: float) -> tuple[float, float, float]:  # -> z down
+        return (c * c * xx - 2.0 * c * s * xz + s * s * zz,
+                s * s * xx + 2.0 * c * s * xz + c * c * zz,
+                -(c * s * (xx - zz) + (c * c - s * s) * xz))
+
+    xB, zB = point(p.x3, p.z3)
+    xA, zA = point(p.xa, p.za)                    # zA is minus the height of A
+    xH, zH = point(p.xa + p.dx4, p.za + p.dz4)
+    w, _ = point(p.xa + p.x5, p.za + p.z5)
+    trail = xA - s * zA / c - w                   # A + t z3 reaches the ground (z3 = (-s, c))
+    IBxx, IBzz, IBxz = tensor(p.I3xx, p.I3zz, p.I3xz)
+    IHxx, IHzz, IHxz = tensor(p.I4xx, p.I4zz, p.I4xz)
+    out = {
+        "w": w, "c": trail, "lam": lam, "g": p.g,
+        "rR": p.R_rear, "mR": p.m2, "IRxx": p.I2xx, "IRyy": p.I2yy,
+        "xB": xB, "zB": zB, "mB": p.m3, "IBxx": IBxx, "IByy": p.I3yy, "IBzz": IBzz, "IBxz": IBxz,
+        "xH": xH, "zH": zH, "mH": p.m4, "IHxx": IHxx, "IHyy": p.I4yy, "IHzz": IHzz, "IHxz": IHxz,
+        "rF": p.R_front, "mF": p.m5, "IFxx": p.I5xx, "IFyy": p.I5yy,
+    }  # fmt: skip
+    assert tuple(out) == BENCHMARK_NAMES
+    return out
+
+
+# -- the parameter file -----------------------------------------------------------------------
 
 _COMMENTS: dict[str, str] = {
     "R_rear": "rR",
@@ -168,48 +529,101 @@ _COMMENTS: dict[str, str] = {
 }  # fmt: skip
 
 
-def toml_text(t: Table1 = TABLE1) -> str:
-    """The parameter file ``benchmark.toml`` for Table 1 (with the formulas as comments)."""
-    values = reference_parameters(t)
-    head = [
-        "# Meijaard et al. (2007) benchmark bicycle, Table 1, in the reference model's parametrization.",
-        "# GENERATED by `python -m reference_model.benchmark --write` from reference_model/benchmark.py,",
-        "# whose docstring derives every formula; tests/test_benchmark.py recomputes the values.",
+def toml_string(text: str) -> str:
+    """A TOML basic string (JSON's escapes are TOML's)."""
+    return json.dumps(str(text), ensure_ascii=False)
+
+
+def float_text(value: float) -> str:
+    """repr of the Python float: the shortest decimal that reads back as the same double."""
+    return repr(float(value))
+
+
+def toml_text(
+    t: Table1 | Mapping[str, Any],
+    *,
+    name: str,
+    source: str,
+    description: str | None = None,
+    generator: str = "`python -m reference_model.benchmark --write`",
+    uncertainties: Mapping[str, float] | None = None,
+    allow_triangle_violation: bool = False,
+) -> str:
+    """The parameter file of the bicycle whose Table 1 values are ``t``: the model's values
+    with the formulas as comments, contact "disc" written out, ``[checks] triangle = "warn"``
+    if ``allow_triangle_violation``, and ``t`` itself in ``[benchmark]`` (with ``uncertainties``,
+    dropped on import, as comments). ``name`` and ``source`` (a bibliographic source or the
+    path of the file imported) are required (a file never takes another bicycle's name) and
+    go into ``[model]``; nothing depends on the date.
+    Raises like :func:`parameters_from_benchmark` for values it cannot load back."""
+    params = parameters_from_benchmark(t, name=name, source=source,
+                                       allow_triangle_violation=allow_triangle_violation)
+    t = params.benchmark
+    values = _model_values(t)
+    uncertainties = dict(uncertainties or {})
+    unknown = [k for k in uncertainties if k not in BENCHMARK_DESCRIPTIONS]
+    if unknown:
+        raise ValueError(f"uncertainties for unknown benchmark names: {', '.join(unknown)}")
+    if description is None:
+        description = (f"bicycle given by Meijaard et al. (2007) benchmark parameters, from "
+                       f"{source}; knife-edge front wheel (contact disc), no drag")
+    lines = [
+        f"# {name}: a bicycle given by Meijaard et al. (2007) benchmark parameters (Table 1's 26",
+        "# names), in the reference model's parametrization.",
+        f"# GENERATED by {generator}",
+        f"# from: {source}",
+        "# Formulas (Table 1 names -> the model's parameters, derived in its docstring):",
+        f"# {FORMULAS_MODULE}.",
         "# Values are repr() of the doubles (shortest exact decimal, <= 17 significant digits).",
-        "#",
-        "# Table 1 (benchmark axes: x forward, z DOWN): w = 1.02, c_trail = 0.08, lambda = pi/10,",
-        "# g = 9.81; rR = 0.3, mR = 2, (IRxx, IRyy) = (0.0603, 0.12); (xB, zB) = (0.3, -0.9), mB = 85,",
-        "# IB = [[9.2, 0, 2.4], [0, 11, 0], [2.4, 0, 2.8]]; (xH, zH) = (0.9, -0.7), mH = 4,",
-        "# IH = [[0.05892, 0, -0.00756], [0, 0.06, 0], [-0.00756, 0, 0.00708]]; rF = 0.35, mF = 3,",
-        "# (IFxx, IFyy) = (0.1405, 0.28).",
+        "# [benchmark] holds the values the file was made from (benchmark axes: x forward, z DOWN;",
+        "# SI, lam in rad); loading checks that the model's values follow from them.",
         "# Model axes: x forward, z UP; frame axes = global pitched by beta = -lambda (z3 = steering",
         "# axis); c = cos(lambda), s = sin(lambda). Going to z up flips the sign of each xz product.",
         "",
         "[model]",
-        'name = "benchmark"',
-        'description = "Meijaard et al. (2007) benchmark bicycle: raked steering axis (lambda = pi/10), '
-        'trail 0.08 m, wheels 0.3 m / 0.35 m, front assembly CoM off the axis, no drag"',
-        'source = "Meijaard, Papadopoulos, Ruina, Schwab, Proc. R. Soc. A 463 (2007) 1955-1982, Table 1"',
-        'contact = "disc"',
+        f"name = {toml_string(name)}",
+        f"description = {toml_string(description)}",
+        f"source = {toml_string(source)}",
+        'contact = "disc"                   # the benchmark\'s knife-edge front wheel',
     ]
-    lines = head
+    if allow_triangle_violation:
+        lines += ["", "[checks]", 'triangle = "warn"                  # allowed on import:']
+        lines += [f"# {w}" for w in params.warnings]
     table = None
-    for name, value in values.items():
-        if PARAMETER_GROUPS[name] != table:
-            table = PARAMETER_GROUPS[name]
+    for n, value in values.items():
+        if PARAMETER_GROUPS[n] != table:
+            table = PARAMETER_GROUPS[n]
             lines += ["", f"[{table}]"]
-        unit = PARAMETER_UNITS[name]
-        entry = f'{name} = {{ value = {value!r}, unit = "{unit}" }}'
-        lines.append(f"{entry:<58s} # {PARAMETER_DESCRIPTIONS[name]}: {_COMMENTS[name]}")
+        entry = f'{n} = {{ value = {float_text(value)}, unit = "{PARAMETER_UNITS[n]}" }}'
+        lines.append(f"{entry:<58s} # {PARAMETER_DESCRIPTIONS[n]}: {_COMMENTS[n]}")
+    lines += ["", "[benchmark]"]
+    for n, value in t.as_dict().items():
+        entry = f"{n} = {float_text(value)}"
+        note = BENCHMARK_DESCRIPTIONS[n]
+        if n in uncertainties:
+            note += f"; +/- {float_text(uncertainties[n])} in the source (dropped)"
+        lines.append(f"{entry:<30s} # {note}")
     return "\n".join(lines) + "\n"
 
 
-def _file_values(path: Path) -> dict[str, float]:
+def _file_values(path) -> dict[str, float]:
     data = tomllib.loads(path.read_text(encoding="utf-8"))
     return {n: data[PARAMETER_GROUPS[n]][n]["value"] for n in PARAMETER_NAMES}
 
 
-def main(argv: list[str] | None = None) -> int:
+_NAMED_SOURCE = "Meijaard, Papadopoulos, Ruina, Schwab, Proc. R. Soc. A 463 (2007) 1955-1982, Table 1"
+_NAMED_DESCRIPTION = ("Meijaard et al. (2007) benchmark bicycle: raked steering axis "
+                      "(lambda = pi/10), trail 0.08 m, wheels 0.3 m / 0.35 m, front assembly CoM "
+                      "off the axis, no drag")
+
+
+def named_model_text() -> str:
+    """The text of ``benchmark.toml`` (the named model "benchmark": Table 1 itself)."""
+    return toml_text(TABLE1, name="benchmark", source=_NAMED_SOURCE,
+                     description=_NAMED_DESCRIPTION)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
     """``--write`` regenerates benchmark.toml; ``--check`` compares it with the formulas."""
     ap = argparse.ArgumentParser(prog="python -m reference_model.benchmark", description=main.__doc__)
     group = ap.add_mutually_exclusive_group(required=True)
@@ -217,10 +631,10 @@ def main(argv: list[str] | None = None) -> int:
     group.add_argument("--check", action="store_true", help="exit 1 if the file's values differ")
     args = ap.parse_args(argv)
     if args.write:
-        BENCHMARK_FILE.write_text(toml_text(), encoding="utf-8")
+        BENCHMARK_FILE.write_text(named_model_text(), encoding="utf-8")
         print(f"wrote {BENCHMARK_FILE}")
         return 0
-    expected = reference_parameters()
+    expected = _model_values(TABLE1)
     found = _file_values(BENCHMARK_FILE)
     bad = [n for n in PARAMETER_NAMES if found[n] != expected[n]]
     for n in bad:

@@ -89,7 +89,8 @@ class Model:
     """The thesis bicycle with one parameter set and one front-contact model.
 
     Attributes: ``params`` (validated `Parameters`), ``contact`` ('thesis' or 'disc'),
-    ``name``, ``coordinates`` (the thesis order), ``independent`` / ``dependent``
+    ``name``, ``warnings`` (``params.warnings``: what a report using the model must say, e.g.
+    an allowed triangle-inequality violation), ``coordinates`` (the thesis order), ``independent`` / ``dependent``
     coordinate names, ``library`` (the compiled code and its cache folder), ``gyroscopic``
     (True, the thesis model; ``Model(params, gyroscopic=False)`` is a deliberately broken
     variant without the gyroscopic terms in Qv, for the fault-injection suite).
@@ -106,6 +107,7 @@ class Model:
         self.params = params
         self.contact = params.contact
         self.name = params.name
+        self.warnings = params.warnings     # e.g. an allowed triangle-inequality violation
         self.gyroscopic = bool(gyroscopic)
         self.library = _library(params.contact, self.gyroscopic)
         self._p = np.ascontiguousarray(params.vector(), dtype=np.float64)
@@ -308,12 +310,21 @@ def raise_on_status(status: np.ndarray, what: str) -> None:
                                    f"{_STATUS.get(int(status[i]), 'unknown failure')}")
 
 
-def load_model(name_or_path: str | Path = "thesis", *, contact: str | None = None) -> Model:
-    """Load a named model ('thesis', 'thesis-disc') or a parameter TOML file.
+def load_model(
+    name_or_path: str | Path = "thesis",
+    *,
+    contact: str | None = None,
+    allow_triangle_violation: bool = False,
+) -> Model:
+    """Load a named model ('thesis', 'thesis-disc', 'benchmark'), a parameter TOML file, or a
+    file of Meijaard et al. (2007) benchmark parameters (.txt in BicycleParameters' format,
+    .json, flat .toml; front contact 'disc').
 
-    ``contact`` overrides the file's front-contact model ('thesis' or 'disc').
+    ``contact`` overrides the file's front-contact model ('thesis' or 'disc');
+    ``allow_triangle_violation=True`` loads inertias that break the triangle inequality and
+    records it in ``model.warnings``.
     """
-    params = resolve_model(name_or_path)
+    params = resolve_model(name_or_path, allow_triangle_violation=allow_triangle_violation)
     if contact is not None:
         params = params.with_contact(contact)
     return Model(params)

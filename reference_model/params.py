@@ -30,6 +30,19 @@ A parameter file is TOML with five tables::
     [inertia]                    # I2xx I2yy I2zz I3xx I3yy I3zz I3xz I4xx ... I5zz
     [environment]                # g cv
 
+    [checks]                     # optional
+    triangle = "strict"          # or "warn": see below
+
+    [benchmark]                  # optional: the Table 1 values the file was generated from
+    w = 1.02                     # (reference_model/benchmark.py; all 26 names, SI, lam in rad)
+
+The optional ``[benchmark]`` table (written by ``reference_model.benchmark``'s importer) must
+agree with the model's values through the formulas of ``reference_model/benchmark.py`` (to
+rounding); it makes :func:`reference_model.benchmark.to_benchmark` exact to the last digit.
+``load_parameters`` also reads files in the benchmark's own format (the 26 names of Table 1 as
+a flat TOML or JSON mapping, or BicycleParameters' ``<Name>Benchmark.txt``), with contact
+``disc`` (the benchmark's knife-edge wheel).
+
 Every parameter is required and is written either as ``{ value = <number>, unit = "<unit>" }``
 or, for convenience, as a **plain number, which means the canonical unit** (``m2 = 2.612`` is
 2.612 kg). Accepted units (converted to the canonical, first one):
@@ -45,6 +58,10 @@ message names the file, the key (``table.key``), the problem and the fix: TOML s
 are not finite real numbers (booleans and strings are not numbers), missing or unknown units,
 non-positive masses, radii or ``g``, negative ``cv``, inertia tensors that are not positive
 definite or whose principal moments violate the triangle inequality, unknown contact models.
+Positive definiteness is always an error; the triangle inequality is an error with
+``[checks] triangle = "strict"`` (the default) and, with ``"warn"`` (or
+``allow_triangle_violation=True``), a warning kept in :attr:`Parameters.warnings` (measured
+inertias of real bicycles break it by a few per cent).
 A :class:`Parameters` built in code is validated the same way.
 
 Named models (:data:`NAMED_MODELS`, used by :func:`resolve_model`): ``thesis`` and
@@ -62,11 +79,14 @@ import os
 import re
 import tomllib
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .benchmark import Table1
 
 __all__ = [
     "BENCHMARK_FILE",
@@ -81,6 +101,8 @@ __all__ = [
     "ParameterError",
     "Parameters",
     "THESIS_FILE",
+    "TRIANGLE_MODES",
+    "TriangleInequalityError",
     "load_parameters",
     "parameters_from_mapping",
     "resolve_model",
@@ -170,7 +192,8 @@ BODY_NAMES: dict[int, str] = {
     5: "front wheel",
 }
 
-_TABLES: tuple[str, ...] = ("model", *_TABLE_MEMBERS)
+_TABLES: tuple[str, ...] = ("model", *_TABLE_MEMBERS, "checks", "benchmark")
+_CHECK_KEYS: tuple[str, ...] = ("triangle",)
 _MODEL_KEYS: tuple[str, ...] = ("name", "description", "source", "contact")
 _VALUE_KEYS: tuple[str, ...] = ("value", "unit")
 
@@ -201,6 +224,8 @@ _INERTIA_KEYS: dict[int, tuple[str, str, str, str | None]] = {
     5: ("I5xx", "I5yy", "I5zz", None),
 }
 _TRIANGLE_RTOL = 1e-12
+#: ``[checks] triangle``: "strict" refuses a triangle-inequality violation, "warn" records it.
+TRIANGLE_MODES: tuple[str, ...] = ("strict", "warn")
 
 PARAMETERS_DIR: Path = Path(__file__).resolve().parent / "parameters"
 THESIS_FILE: Path = PARAMETERS_DIR / "thesis.toml"
@@ -237,6 +262,11 @@ class ParameterError(ValueError):
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (type(self), (self.file, self.key, self.problem, self.fix))
+
+
+class TriangleInequalityError(ParameterError):
+    """An inertia tensor whose principal moments violate the triangle inequality (positive
+    definite, but not a real body's). Refused in "strict" mode, a warning in "warn" mode."""
 
 
 def _one_line(text: str) -> str:
@@ -367,12 +397,20 @@ def _check_inertia(file: str, body: int, values: Mapping[str, float]) -> None:
                 f"principal moments {tuple(round(m, 12) for m in moments)} {unit}: "
                 f"{moments[i]!r} > sum of the other two = {others!r}"
             )
-        raise ParameterError(
+        raise TriangleInequalityError(
             file,
             ", ".join(_qualified(k) for k in keys),
             f"{what} violates the triangle inequality of principal moments "
             f"(I1 + I2 >= I3 for a real body): {detail}",
             f"check the values and units of {', '.join((kxx, kyy, kzz) + ((kxz,) if kxz else ()))}",
+        )
+
+
+def _check_triangle_mode(file: str, mode: object) -> None:
+    if mode not in TRIANGLE_MODES:
+        raise ParameterError(
+            file, "checks.triangle", f"unknown triangle-inequality check mode {mode!r}",
+            'use "strict" (refuse, the default) or "warn" (load and record a warning)',
         )
 
 
@@ -400,6 +438,13 @@ class Parameters:
     name, ``contact`` the front contact model (one of :data:`CONTACT_MODELS`) and ``source``
     the file it was read from (``"<memory>"`` if built in code). Validation runs on every
     construction, including :meth:`replace` and :meth:`with_contact`.
+
+    ``triangle`` is the triangle-inequality check mode (:data:`TRIANGLE_MODES`): "strict"
+    raises :class:`TriangleInequalityError`, "warn" keeps one line per violating body in
+    ``warnings`` (a tuple of strings, empty for a clean set; not an argument). ``benchmark``
+    is the :class:`reference_model.benchmark.Table1` the values were computed from, if any
+    (provenance for an exact :func:`reference_model.benchmark.to_benchmark`; not compared;
+    :meth:`replace` drops it when a parameter value changes).
     """
 
     R_rear: float
@@ -435,6 +480,9 @@ class Parameters:
     name: str = "custom"
     contact: str = "thesis"
     source: str = MEMORY_SOURCE
+    triangle: str = "strict"
+    benchmark: Table1 | None = field(default=None, compare=False, repr=False)
+    warnings: tuple[str, ...] = field(init=False, default=(), compare=False)
 
     def __post_init__(self) -> None:
         source = self.source
@@ -453,8 +501,20 @@ class Parameters:
         for n, v in values.items():
             object.__setattr__(self, n, v)
         _check_signs(source, values)
+        _check_triangle_mode(source, self.triangle)
+        warned: list[str] = []
         for body in _INERTIA_KEYS:
-            _check_inertia(source, body, values)
+            try:
+                _check_inertia(source, body, values)
+            except TriangleInequalityError as exc:
+                if self.triangle == "strict":
+                    raise TriangleInequalityError(
+                        exc.file, exc.key, exc.problem,
+                        f"{exc.fix}; if the values are measured and right, allow it with "
+                        '[checks] triangle = "warn" (or allow_triangle_violation=True)',
+                    ) from None
+                warned.append(f"{exc.key}: {exc.problem} (allowed: triangle = \"warn\")")
+        object.__setattr__(self, "warnings", tuple(warned))
         _check_contact(source, self.contact)
 
     # -- conversions ---------------------------------------------------------------------
@@ -471,6 +531,7 @@ class Parameters:
         name: str = "custom",
         contact: str = "thesis",
         source: str = MEMORY_SOURCE,
+        triangle: str = "strict",
     ) -> Parameters:
         """Inverse of :meth:`vector`."""
         values = [float(x) for x in np.asarray(p, dtype=np.float64).ravel()]
@@ -481,20 +542,41 @@ class Parameters:
                 f"parameter vector has {len(values)} entries, expected {len(PARAMETER_NAMES)}",
                 "pass one value per name in PARAMETER_NAMES, in that order",
             )
-        return cls(**dict(zip(PARAMETER_NAMES, values)), name=name, contact=contact, source=source)
+        return cls(**dict(zip(PARAMETER_NAMES, values)), name=name, contact=contact, source=source,
+                   triangle=triangle)
 
-    def as_dict(self) -> dict[str, float | str]:
-        """All fields: the parameters in :data:`PARAMETER_NAMES` order, then name, contact,
-        source. ``Parameters(**p.as_dict()) == p``."""
-        out: dict[str, float | str] = {n: getattr(self, n) for n in PARAMETER_NAMES}
-        out.update(name=self.name, contact=self.contact, source=self.source)
+    @classmethod
+    def from_benchmark(
+        cls,
+        mapping: Mapping[str, Any],
+        *,
+        name: str = "custom",
+        source: str = MEMORY_SOURCE,
+        allow_triangle_violation: bool = False,
+    ) -> Parameters:
+        """The model from Meijaard et al. (2007) Table 1 names (``w, c, lam, g, rR, ...``: all
+        26, any real numbers, NumPy scalars included), front contact "disc" (the benchmark's
+        knife-edge wheel), the formulas of :mod:`reference_model.benchmark`. Bad input raises
+        one :class:`ParameterError` naming the benchmark key."""
+        from .benchmark import parameters_from_benchmark  # benchmark.py imports this module
+
+        return parameters_from_benchmark(
+            mapping, name=name, source=source, allow_triangle_violation=allow_triangle_violation
+        )
+
+    def as_dict(self) -> dict[str, Any]:
+        """All init fields: the parameters in :data:`PARAMETER_NAMES` order, then name, contact,
+        source, triangle, benchmark. ``Parameters(**p.as_dict()) == p``."""
+        out: dict[str, Any] = {n: getattr(self, n) for n in PARAMETER_NAMES}
+        out.update(name=self.name, contact=self.contact, source=self.source,
+                   triangle=self.triangle, benchmark=self.benchmark)
         return out
 
     # -- derived copies ------------------------------------------------------------------
 
     def replace(self, **changes: Any) -> Parameters:
         """A copy with some fields changed, validated again."""
-        fields = {f.name for f in dataclasses.fields(self)}
+        fields = {f.name for f in dataclasses.fields(self) if f.init}
         for key in changes:
             if key not in fields:
                 hint = _closest(key, fields)
@@ -504,6 +586,8 @@ class Parameters:
                     f"{key!r} is not a field of Parameters",
                     f"use {hint!r}" if hint else "use a name from PARAMETER_NAMES, or name/contact/source",
                 )
+        if "benchmark" not in changes and any(n in changes for n in PARAMETER_NAMES):
+            changes["benchmark"] = None      # the Table 1 provenance no longer holds
         return dataclasses.replace(self, **changes)
 
     def with_contact(self, contact: str) -> Parameters:
@@ -595,6 +679,12 @@ def _check_structure(file: str, data: Mapping[str, Any]) -> None:
                 file, key, f"unknown table [{key}]",
                 f"{fix} valid tables are {', '.join(_TABLES)}",
             )
+    for key in data.get("checks", {}):
+        if key not in _CHECK_KEYS:
+            raise ParameterError(
+                file, f"checks.{key}", f"unknown key {key!r} in [checks]",
+                f"remove it; valid keys in [checks] are {', '.join(_CHECK_KEYS)}",
+            )
     for key in data.get("model", {}):
         if key not in _MODEL_KEYS:
             hint = _closest(key, _MODEL_KEYS)
@@ -682,33 +772,67 @@ def parameters_from_mapping(
     contact: str | None = None,
     name: str | None = None,
     default_name: str = "custom",
+    allow_triangle_violation: bool = False,
 ) -> Parameters:
     """Validate an already-parsed parameter document (the TOML layout as nested dicts).
 
     ``contact`` and ``name``, when given, override ``[model]``; without either, the name is
     ``[model].name`` or ``default_name`` and the contact ``[model].contact`` or "thesis".
+    ``allow_triangle_violation=True`` overrides ``[checks] triangle`` with "warn".
     """
     file = str(source)
     _check_structure(file, data)
     model = _read_model_table(file, data.get("model", {}))
+    triangle = data.get("checks", {}).get("triangle", "strict")
+    _check_triangle_mode(file, triangle)
+    if allow_triangle_violation:
+        triangle = "warn"
     values = {
         n: _read_value(file, n, data[PARAMETER_GROUPS[n]][n]) for n in PARAMETER_NAMES
     }
-    return Parameters(
+    params = Parameters(
         **values,
         name=name if name is not None else model.get("name", default_name),
         contact=contact if contact is not None else model.get("contact", "thesis"),
         source=file,
+        triangle=triangle,
+    )
+    if "benchmark" in data:
+        from .benchmark import attach_benchmark  # benchmark.py imports this module
+
+        params = attach_benchmark(params, data["benchmark"], key="benchmark")
+    return params
+
+
+_BENCHMARK_SUFFIXES = (".txt", ".json")
+
+
+def _is_benchmark_layout(data: Mapping[str, Any]) -> bool:
+    """A flat mapping of Table 1 names (not the model's tables)."""
+    from .benchmark import BENCHMARK_NAMES
+
+    if any(k in BENCHMARK_NAMES and k not in PARAMETER_GROUPS for k in data):
+        return True
+    return bool(data) and not any(isinstance(v, dict) for v in data.values()) and not any(
+        k in PARAMETER_GROUPS for k in data
     )
 
 
 def load_parameters(
-    path: str | os.PathLike[str], contact: str | None = None, name: str | None = None
+    path: str | os.PathLike[str],
+    contact: str | None = None,
+    name: str | None = None,
+    *,
+    allow_triangle_violation: bool = False,
 ) -> Parameters:
-    """Read and validate a TOML parameter file (format in the module docstring).
+    """Read and validate a TOML parameter file (format in the module docstring), or a file of
+    Meijaard et al. (2007) benchmark parameters (``.txt`` in BicycleParameters' format,
+    ``.json``, or a flat ``.toml`` of Table 1 names; see ``reference_model.benchmark_files``).
 
-    ``contact`` and ``name`` override the file's ``[model]`` entries. Every problem raises
-    one :class:`ParameterError`.
+    ``contact`` and ``name`` override the file's ``[model]`` entries (a benchmark file has
+    contact "disc" and its file name without extension as name).
+    ``allow_triangle_violation=True`` turns the triangle-inequality check into a warning.
+    Every problem raises one :class:`ParameterError`.
     """
     file = os.fspath(path)
     named = ", ".join(NAMED_MODELS)
@@ -730,17 +854,34 @@ def load_parameters(
         raise ParameterError(
             file, "(file)", f"not UTF-8 text (byte {exc.start})", "save the file as UTF-8"
         ) from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise _syntax_error(file, text, exc) from None
+    if Path(file).suffix.lower() in _BENCHMARK_SUFFIXES:
+        from .benchmark_files import parse_benchmark_text
+
+        data = parse_benchmark_text(text, file).values
+    else:
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise _syntax_error(file, text, exc) from None
+    if Path(file).suffix.lower() in _BENCHMARK_SUFFIXES or _is_benchmark_layout(data):
+        from .benchmark import parameters_from_benchmark
+
+        params = parameters_from_benchmark(
+            data, name=name if name is not None else Path(file).stem, source=file,
+            allow_triangle_violation=allow_triangle_violation,
+        )
+        return params if contact is None else params.with_contact(contact)
     return parameters_from_mapping(
-        data, source=file, contact=contact, name=name, default_name=Path(file).stem
+        data, source=file, contact=contact, name=name, default_name=Path(file).stem,
+        allow_triangle_violation=allow_triangle_violation,
     )
 
 
-def resolve_model(name_or_path: str | os.PathLike[str] | Parameters) -> Parameters:
-    """A named model from :data:`NAMED_MODELS`, or the parameters in a .toml file.
+def resolve_model(
+    name_or_path: str | os.PathLike[str] | Parameters, *, allow_triangle_violation: bool = False
+) -> Parameters:
+    """A named model from :data:`NAMED_MODELS`, or the parameters in a file (a .toml parameter
+    file, or benchmark parameters in .txt/.json/.toml: see :func:`load_parameters`).
 
     A :class:`Parameters` instance is returned unchanged.
     """
@@ -748,10 +889,11 @@ def resolve_model(name_or_path: str | os.PathLike[str] | Parameters) -> Paramete
         return name_or_path
     if isinstance(name_or_path, str) and name_or_path in NAMED_MODELS:
         path, contact = NAMED_MODELS[name_or_path]
-        return load_parameters(path, contact=contact, name=name_or_path)
+        return load_parameters(path, contact=contact, name=name_or_path,
+                               allow_triangle_violation=allow_triangle_violation)
     candidate = Path(name_or_path)
-    if candidate.suffix == ".toml" or candidate.is_file():
-        return load_parameters(candidate)
+    if candidate.suffix.lower() in (".toml", *_BENCHMARK_SUFFIXES) or candidate.is_file():
+        return load_parameters(candidate, allow_triangle_violation=allow_triangle_violation)
     text = os.fspath(name_or_path)
     hint = _closest(text, NAMED_MODELS)
     raise ParameterError(

@@ -25,8 +25,9 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .model import Model
-from .solvers import (THESIS_BAUMGARTE, ConsistentState, IndependentMotion, InverseDynamics,
-                      Trajectory, consistent_state, inverse_dynamics, inverse_kinematics, simulate)
+from .solvers import (DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE, ConsistentState, IndependentMotion,
+                      InverseDynamics, Trajectory, consistent_state, inverse_dynamics,
+                      inverse_kinematics, simulate)
 
 THESIS_GRID = (0.0, 0.01, 629)   # start, step, samples: 0:0.01:2*pi
 
@@ -54,6 +55,34 @@ class ExpectedDifference:
 
 
 @dataclass(frozen=True)
+class TorqueSamples:
+    """Rider torques given by samples (from a scenario file's CSV): times ``t`` (s, strictly
+    increasing, covering the run), ``T`` rows (Mdir, Mped, Mvue) in N m, and how to
+    interpolate between them: "cubic" (not-a-knot spline), "linear" or "previous" (hold)."""
+
+    t: tuple[float, ...]
+    T: tuple[tuple[float, float, float], ...]
+    interpolation: str = "cubic"
+    source: str = ""
+
+    def function(self):
+        """t -> (3,) torques (or (N, 3) for an array of times)."""
+        t, T = np.asarray(self.t), np.asarray(self.T)
+        if self.interpolation == "cubic":
+            spline = CubicSpline(t, T, axis=0, bc_type="not-a-knot")
+            return lambda s: spline(s)
+        if self.interpolation == "linear":
+            return lambda s: np.stack([np.interp(s, t, T[:, j]) for j in range(3)], axis=-1)
+        if self.interpolation == "previous":
+            def hold(s):
+                i = np.clip(np.searchsorted(t, s, side="right") - 1, 0, len(t) - 1)
+                return T[i]
+            return hold
+        raise ValueError(f"unknown interpolation {self.interpolation!r}; use cubic, linear or "
+                         "previous")
+
+
+@dataclass(frozen=True)
 class Scenario:
     """One named scenario: its kind, model, grid, and either a prescribed independent motion
     (inverse) or an initial state and rider torques (forward)."""
@@ -66,13 +95,15 @@ class Scenario:
     motion: IndependentMotion | None = None    # inverse: theta, psi, gamma of t
     q0: tuple[float, ...] | None = None        # forward: initial coordinates (projected)
     dq_ind0: tuple[float, float, float] | None = None   # forward: dtheta, dpsi, dgamma at t0
-    torques: tuple[float, float, float] | str = (0.0, 0.0, 0.0)  # or "zigzag" (spline of its ID)
+    torques: tuple[float, float, float] | str | TorqueSamples = (0.0, 0.0, 0.0)  # or "zigzag"
+    #                                          (spline of its ID; TORQUE_FUNCTIONS), or samples
     constraints: str = "baumgarte"
     baumgarte: tuple[float, float] = THESIS_BAUMGARTE
     thesis_claim: str = ""
     tags: tuple[str, ...] = field(default_factory=tuple)
     compared: tuple[str, ...] = ()             # keys of QUANTITIES; default by kind
     expected_differences: tuple[ExpectedDifference, ...] = ()
+    fall_limit: float = DEFAULT_FALL_LIMIT     # rad: a forward run stops when |theta| reaches it
 
     def __post_init__(self):
         if not self.compared:
@@ -107,6 +138,15 @@ def _zigzag_motion(t):
     dq = np.stack([-c / 3, 5.0 + 0 * t, c / 2], axis=-1)
     ddq = np.stack([s / 3, 0 * t, -s / 2], axis=-1)
     return q, dq, ddq
+
+
+# The named independent motions of inverse scenarios (scenario files name them) and the named
+# torque functions of forward ones (the inverse-dynamics torques of that built-in scenario).
+MOTIONS: dict[str, IndependentMotion] = {
+    "check": IndependentMotion(_check_motion, "theta = 0, psi = 5 t, gamma = 0"),
+    "zigzag": IndependentMotion(_zigzag_motion, "theta = -sin t / 3, psi = 5 t, gamma = sin t / 2"),
+}
+TORQUE_FUNCTIONS: tuple[str, ...] = ("check", "zigzag")
 
 
 def _stability(psid: float) -> Scenario:
@@ -159,11 +199,11 @@ def _iftomm_bicycle(v: float, roll_rate: float, claim: str) -> Scenario:
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
     Scenario("check", "straight rolling at R*5 = 1.6 m/s: only the pedal torque, constant, "
              "balancing the drag", "inverse",
-             motion=IndependentMotion(_check_motion, "theta = 0, psi = 5 t, gamma = 0"),
+             motion=MOTIONS["check"],
              thesis_claim="only the pedal torque is non-zero, and constant"),
     Scenario("zigzag", "prescribed lean and steer oscillation: theta = -sin(t)/3, psi = 5t, "
              "gamma = sin(t)/2", "inverse",
-             motion=IndependentMotion(_zigzag_motion, "theta = -sin t / 3, psi = 5 t, gamma = sin t / 2")),
+             motion=MOTIONS["zigzag"]),
     Scenario("replay", "zigzag's rider torques (cubic spline) fed into the forward dynamics from "
              "its initial state, Baumgarte a1 = a2 = 10 (thesis 6.2.2.1)", "forward",
              q0=(0,) * 8, dq_ind0=(-1 / 3, 5.0, 0.5), torques="zigzag",
@@ -218,7 +258,9 @@ def initial_state(model: Model, sc: Scenario) -> ConsistentState:
 
 def torque_input(model: Model, sc: Scenario):
     """Constant torques, or for 'zigzag' the not-a-knot cubic spline (MATLAB's spline) of the
-    zigzag inverse-dynamics torques computed on this model."""
+    zigzag inverse-dynamics torques computed on this model, or the interpolated samples."""
+    if isinstance(sc.torques, TorqueSamples):
+        return sc.torques.function()
     if isinstance(sc.torques, str):
         source = get_scenario(sc.torques)
         ident = run_inverse(model, source)
@@ -231,7 +273,8 @@ def run_forward(model: Model, sc: Scenario, *, constraints: str | None = None, *
     """Forward run of a scenario from its projected initial state."""
     init = initial_state(model, sc)
     traj = simulate(model, init.q, init.dq, sc.t, torque_input(model, sc),
-                    constraints=constraints or sc.constraints, baumgarte=sc.baumgarte, **kwargs)
+                    constraints=constraints or sc.constraints, baumgarte=sc.baumgarte,
+                    **{"fall_limit": sc.fall_limit, **kwargs})
     traj.settings["initial_correction"] = init.describe()
     traj.settings["beta_correction"] = init.beta_correction
     return traj

@@ -105,7 +105,8 @@ def test_parameter_names_contract() -> None:
     assert PARAMETER_NAMES[:2] == ("R_rear", "R_front")
     assert PARAMETER_NAMES[-2:] == ("g", "cv")
     fields = [f.name for f in dataclasses.fields(Parameters)]
-    assert fields == [*PARAMETER_NAMES, "name", "contact", "source"]
+    assert fields == [*PARAMETER_NAMES, "name", "contact", "source", "triangle", "benchmark",
+                      "warnings"]
     assert list(PARAMETER_UNITS) == list(PARAMETER_NAMES)
     assert list(PARAMETER_GROUPS) == list(PARAMETER_NAMES)
     assert CONTACT_MODELS == ("thesis", "disc")

@@ -1,0 +1,280 @@
+"""Files of Meijaard et al. (2007) benchmark parameters: read them, import them, write them.
+
+A bicycle is often published by Table 1's 26 names (``w, c, lam, g, rR, mR, IRxx, IRyy, xB,
+zB, mB, IBxx, IByy, IBzz, IBxz, xH, zH, mH, IHxx, IHyy, IHzz, IHxz, rF, mF, IFxx, IFyy``;
+SI units, lam in rad, benchmark axes x forward, z down). Three spellings are read:
+
+* **BicycleParameters' ``<Name>Benchmark.txt``**: one ``name = value`` per line, the value
+  optionally with an uncertainty, ``1.07+/-0.002`` (also ``1.07 ± 0.002`` and the factored
+  exponent ``(6.53+/-0.02)e-07``). Blank lines and ``#`` comments are ignored. The uncertainties
+  are dropped (the model takes the nominal value) and kept in :attr:`BenchmarkFile.uncertainties`,
+  which the importer writes as comments.
+* **JSON**: one object ``{"w": 1.02, ...}`` of numbers.
+* **TOML**: the same names as top-level keys, ``w = 1.02``.
+
+:func:`import_benchmark` turns such a file into the reference model's parameter file (text),
+:func:`write_import` writes it (atomically, after checking it loads back to the same model);
+:func:`benchmark_text` / :func:`write_benchmark` are the reverse (export), from
+:func:`reference_model.benchmark.to_benchmark`. ``load_model`` reads all three formats directly
+(``reference_model.params.load_parameters``). Every problem is one :class:`ParameterError`
+naming the file, the key (or line), the problem and the fix.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import tempfile
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .benchmark import (BENCHMARK_DESCRIPTIONS, BENCHMARK_NAMES, float_text,
+                        parameters_from_benchmark, to_benchmark, toml_text)
+from .params import ParameterError, Parameters, parameters_from_mapping
+
+__all__ = [
+    "BENCHMARK_FORMATS", "BenchmarkFile", "ImportedBicycle", "benchmark_text", "import_benchmark",
+    "parse_benchmark_text", "read_benchmark_file", "write_benchmark", "write_import",
+]
+
+#: file suffix -> format name
+BENCHMARK_FORMATS: dict[str, str] = {".txt": "txt", ".json": "json", ".toml": "toml"}
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_PLAIN = re.compile(rf"^({_NUMBER})$")
+_PLUS_MINUS = re.compile(rf"^({_NUMBER})\s*(?:\+/-|±)\s*({_NUMBER})$")
+_FACTORED = re.compile(rf"^\(\s*({_NUMBER})\s*(?:\+/-|±)\s*({_NUMBER})\s*\)\s*[eE]([-+]?\d+)$")
+_PAREN = re.compile(rf"^\(\s*({_NUMBER})\s*(?:\+/-|±)\s*({_NUMBER})\s*\)$")
+_TXT_EXAMPLE = "w = 1.07+/-0.002"
+
+
+@dataclass(frozen=True)
+class BenchmarkFile:
+    """What a benchmark-parameter file says: ``values`` (name -> number, as read; validated by
+    :func:`reference_model.benchmark.table1_from_mapping` when used), ``uncertainties`` (name ->
+    the ``+/-`` value, .txt only) and ``source`` (the path)."""
+
+    values: dict[str, Any]
+    source: str
+    uncertainties: dict[str, float] = field(default_factory=dict)
+
+
+def _format_of(file: str) -> str:
+    suffix = Path(file).suffix.lower()
+    if suffix not in BENCHMARK_FORMATS:
+        raise ParameterError(file, "(file)", f"unknown benchmark file type {suffix or '(none)'!r}",
+                             "use a .txt (BicycleParameters' <Name>Benchmark.txt), .json or "
+                             ".toml file")
+    return BENCHMARK_FORMATS[suffix]
+
+
+def _parse_txt(text: str, file: str) -> BenchmarkFile:
+    values: dict[str, Any] = {}
+    uncertainties: dict[str, float] = {}
+    lines: dict[str, int] = {}
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        where = f"line {number}"
+        if "=" not in line:
+            raise ParameterError(file, where, f"expected 'name = value', got {raw.strip()!r}",
+                                 f"write one parameter per line, e.g. {_TXT_EXAMPLE}")
+        name, value = (part.strip() for part in line.split("=", 1))
+        if name in lines:
+            raise ParameterError(file, f"{where}: {name}",
+                                 f"{name} is given twice (lines {lines[name]} and {number})",
+                                 "keep one of the two lines")
+        lines[name] = number
+        for pattern in (_PLAIN, _PLUS_MINUS, _PAREN, _FACTORED):
+            match = pattern.match(value)
+            if match:
+                break
+        else:
+            raise ParameterError(file, f"{where}: {name}",
+                                 f"value {value!r} is not a number or number+/-uncertainty",
+                                 f"write e.g. {_TXT_EXAMPLE} (SI units, lam in rad)")
+        groups = match.groups()
+        scale = 10.0 ** int(groups[2]) if len(groups) == 3 else 1.0
+        nominal = float(groups[0]) if scale == 1.0 else float(f"{groups[0]}e{groups[2]}")
+        values[name] = nominal
+        if len(groups) >= 2:
+            uncertainty = float(groups[1]) * scale
+            if not (math.isfinite(uncertainty) and uncertainty >= 0.0):
+                raise ParameterError(file, f"{where}: {name}",
+                                     f"uncertainty {groups[1]!r} is not a non-negative number",
+                                     f"write e.g. {_TXT_EXAMPLE}")
+            uncertainties[name] = uncertainty
+    return BenchmarkFile(values, file, uncertainties)
+
+
+def _no_duplicates(file: str):
+    def hook(pairs):
+        seen: dict[str, Any] = {}
+        for key, value in pairs:
+            if key in seen:
+                raise ParameterError(file, key, f"{key!r} is given twice",
+                                     "keep one of the two entries")
+            seen[key] = value
+        return seen
+    return hook
+
+
+def parse_benchmark_text(text: str, file: str | os.PathLike[str], fmt: str | None = None) -> BenchmarkFile:
+    """Parse the text of a benchmark-parameter file; ``fmt`` ("txt", "json", "toml") defaults
+    to the file's suffix. Values are not validated yet (see :class:`BenchmarkFile`)."""
+    file = os.fspath(file)
+    fmt = fmt or _format_of(file)
+    if fmt == "txt":
+        return _parse_txt(text, file)
+    if fmt == "json":
+        try:
+            data = json.loads(text, object_pairs_hook=_no_duplicates(file))
+        except json.JSONDecodeError as exc:
+            raise ParameterError(file, f"line {exc.lineno}", f"invalid JSON: {exc.msg}",
+                                 'write one object of numbers, e.g. {"w": 1.02, "c": 0.08, ...}'
+                                 ) from None
+    elif fmt == "toml":
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ParameterError(file, "(syntax)", f"invalid TOML: {exc}",
+                                 "write one 'name = number' per line, e.g. w = 1.02") from None
+    else:
+        raise ValueError(f"unknown benchmark format {fmt!r}; use one of txt, json, toml")
+    if not isinstance(data, dict):
+        raise ParameterError(file, "(file)", f"expected an object of Table 1 names, got "
+                             f"{type(data).__name__}", 'write {"w": 1.02, "c": 0.08, ...}')
+    return BenchmarkFile(dict(data), file)
+
+
+def read_benchmark_file(path: str | os.PathLike[str]) -> BenchmarkFile:
+    """Read a .txt/.json/.toml file of benchmark parameters (format by suffix)."""
+    file = os.fspath(path)
+    fmt = _format_of(file)
+    try:
+        text = Path(file).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ParameterError(file, "(file)", "no such file",
+                             "give the path of an existing benchmark-parameter file") from None
+    except UnicodeDecodeError as exc:
+        raise ParameterError(file, "(file)", f"not UTF-8 text (byte {exc.start})",
+                             "save the file as UTF-8") from None
+    except OSError as exc:
+        raise ParameterError(file, "(file)", f"cannot read the file: {exc.strerror or exc}",
+                             "give the path of a readable file") from None
+    return parse_benchmark_text(text, file, fmt)
+
+
+@dataclass(frozen=True)
+class ImportedBicycle:
+    """An imported bicycle: its validated ``params`` (contact "disc") and ``text``, the
+    parameter file to write (see :func:`reference_model.benchmark.toml_text`)."""
+
+    params: Parameters
+    text: str
+
+
+def import_benchmark(
+    path: str | os.PathLike[str],
+    *,
+    name: str | None = None,
+    allow_triangle_violation: bool = False,
+    description: str | None = None,
+) -> ImportedBicycle:
+    """Import a benchmark-parameter file: the model's parameters and the parameter file's text.
+
+    ``name`` defaults to the input file's stem; the file records the source path as given,
+    the formulas' module, contact "disc", the Table 1 values with their uncertainties (as
+    comments), and ``[checks] triangle = "warn"`` if ``allow_triangle_violation``.
+    """
+    read = read_benchmark_file(path)
+    name = Path(read.source).stem if name is None else name
+    params = parameters_from_benchmark(read.values, name=name, source=read.source,
+                                       allow_triangle_violation=allow_triangle_violation)
+    text = toml_text(params.benchmark, name=name, source=read.source, description=description,
+                     generator="reference_model.benchmark_files.import_benchmark "
+                               "(bicycle-xval import)",
+                     uncertainties={k: v for k, v in read.uncertainties.items()},
+                     allow_triangle_violation=allow_triangle_violation)
+    return ImportedBicycle(params, text)
+
+
+def _write_atomically(out: Path, text: str) -> None:
+    """Write ``text`` to ``out`` via a temporary file in the same folder and a rename, so a
+    failure never leaves a half-written file."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_import(
+    path: str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    *,
+    name: str | None = None,
+    allow_triangle_violation: bool = False,
+    description: str | None = None,
+) -> Parameters:
+    """Import ``path`` and write the parameter file ``out`` (atomically). The written text is
+    loaded back before it is written and must give the same model (values, name, contact,
+    triangle mode, Table 1). Returns the loaded parameters (``source`` = ``out``)."""
+    out = Path(out)
+    if out.suffix.lower() != ".toml":
+        raise ParameterError(str(out), "(output)", "the imported parameter file must be .toml "
+                             f"(a {out.suffix or 'suffix-less'} file would not load as one)",
+                             f"name it e.g. {out.with_suffix('.toml').name}")
+    imported = import_benchmark(path, name=name, allow_triangle_violation=allow_triangle_violation,
+                                description=description)
+    loaded = parameters_from_mapping(tomllib.loads(imported.text), source=str(out),
+                                     default_name=out.stem)
+    expected = imported.params.replace(source=str(out))
+    if loaded != expected or loaded.benchmark != expected.benchmark:
+        raise AssertionError(f"{out}: the generated file does not load back to the imported model")
+    _write_atomically(out, imported.text)
+    return loaded
+
+
+def benchmark_text(values: Mapping[str, float], fmt: str = "toml", *, comment: str = "") -> str:
+    """Table 1 values as a file: "toml" (``w = 1.02`` lines), "json" (one object) or "txt"
+    (BicycleParameters' format, ``w = 1.02+/-0.0``: no uncertainty known). Floats are written
+    with repr (exact); ``comment`` (toml and txt only) heads the file."""
+    missing = [n for n in BENCHMARK_NAMES if n not in values]
+    if missing:
+        raise ValueError(f"benchmark values missing: {', '.join(missing)}")
+    numbers = {n: float(values[n]) for n in BENCHMARK_NAMES}
+    head = [f"# {line}" for line in comment.splitlines()]
+    if fmt == "json":
+        return json.dumps(numbers, indent=2) + "\n"
+    if fmt == "toml":
+        body = [f"{f'{n} = {float_text(v)}':<30s} # {BENCHMARK_DESCRIPTIONS[n]}"
+                for n, v in numbers.items()]
+    elif fmt == "txt":
+        body = [f"{n} = {float_text(v)}+/-0.0" for n, v in numbers.items()]
+    else:
+        raise ValueError(f"unknown benchmark format {fmt!r}; use one of toml, json, txt")
+    return "\n".join(head + body) + "\n"
+
+
+def write_benchmark(params: Parameters, out: str | os.PathLike[str], fmt: str | None = None) -> dict[str, float]:
+    """Export: Table 1 values of ``params`` (:func:`to_benchmark`, which says which parameters
+    have no counterpart) written to ``out`` atomically, format by ``fmt`` or the suffix."""
+    out = Path(out)
+    fmt = fmt or _format_of(str(out))
+    values = to_benchmark(params)
+    comment = (f"{params.name}: Meijaard et al. (2007) benchmark parameters (Table 1 names; SI, "
+               f"lam in rad, x forward, z down)\nexported by reference_model.benchmark_files from "
+               f"{params.source}")
+    _write_atomically(out, benchmark_text(values, fmt, comment=comment))
+    return values
