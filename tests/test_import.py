@@ -41,7 +41,7 @@ import numpy as np
 import pytest
 
 from benchmark_sets import DATA, NAMES, TABLE1 as TABLE1_TEXT, sets
-from comparisons.published import table2_eigenvalues
+from comparisons.judgments.published import table2_eigenvalues
 from reference_model import ParameterError, Parameters, load_model, load_parameters
 from reference_model.benchmark import (BENCHMARK_NAMES, TABLE1, Table1, reference_parameters,
                                        to_benchmark, toml_text)
