@@ -11,6 +11,8 @@ from ..judgments.diagnose import COMPARED_ENGINES, DEFAULT_STATES, diagnose
 from ..report.files import write_text
 from .errors import EXIT_FAIL, EXIT_OK, UsageError
 
+MAX_STATES = 2000
+
 
 def add_diagnose_parser(subparsers) -> None:
     """Add ``diagnose FILE [--against MODEL] [--engines ...] [--states N] [--json OUT]``."""
@@ -38,8 +40,9 @@ def run_diagnose(args) -> int:
         what = f"unknown engine {bad[0]!r}" if bad else "no engine given"
         raise UsageError(f"--engines: {what}; use a comma-separated subset of "
                          f"{','.join(COMPARED_ENGINES)} (the reference is the model under test)")
-    if args.states < 4:
-        raise UsageError(f"--states must be an integer >= 4; got {args.states}")
+    if not 4 <= args.states <= MAX_STATES:
+        raise UsageError(f"--states must be an integer from 4 to {MAX_STATES} (the least-squares "
+                         f"fit's matrix grows with it); got {args.states}")
     if args.json is not None and args.json.is_dir():
         raise UsageError(f"--json {args.json} is a folder; give a file name, e.g. diagnosis.json")
     result = diagnose(args.file, args.against, names, args.states)

@@ -86,6 +86,10 @@ def run_eigenvalues(args) -> int:
     from reference_model.linearize import LinearizationError, linearize
 
     speeds = parse_speeds(getattr(args, "speeds", "0:10:0.01"))
+    figure = getattr(args, "figure", None)
+    if figure is not None and Path(figure).suffix.lower() != ".png":
+        raise UsageError(f"--figure {figure}: the figure is a PNG image; give a file name ending "
+                         "in .png, e.g. eigenvalues.png")
     model = load_model(args.model, contact=getattr(args, "contact", None))
     if getattr(args, "no_drag", False) and model.params.cv != 0.0:
         model = model.with_params(model.params.replace(cv=0.0))
@@ -110,7 +114,6 @@ def run_eigenvalues(args) -> int:
         print(f"  in [{max(0.0, speeds.min()):g}, {speeds.max():g}] m/s: " + ", ".join(text)
               + (f"; self-stable for {weave:.4f} < v < {capsize:.4f} m/s"
                  if weave is not None and capsize is not None and capsize > weave else ""))
-    figure = getattr(args, "figure", None)
     if figure is not None:
         from ..report.figures import save_figure
         print(f"  figure -> {save_figure('eigenvalues', eigenvalue_curves(model, speeds), figure)}")

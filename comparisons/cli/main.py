@@ -232,6 +232,25 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: options whose value may start with a minus sign (a negative speed): argparse would read
+#: ``--speeds -5:5:1`` as two options, so the pair is joined into ``--speeds=-5:5:1``
+SIGNED_VALUE_OPTIONS = ("--speeds",)
+
+
+def _join_signed_values(argv: list[str]) -> list[str]:
+    out, k = [], 0
+    while k < len(argv):
+        a = argv[k]
+        if a in SIGNED_VALUE_OPTIONS and k + 1 < len(argv) and argv[k + 1][:2] in {
+                f"-{d}" for d in "0123456789."}:
+            out.append(f"{a}={argv[k + 1]}")
+            k += 2
+            continue
+        out.append(a)
+        k += 1
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     from reference_model import ModelEvaluationError, ParameterError
     from reference_model.scenarios import UnknownScenarioError
@@ -239,7 +258,8 @@ def main(argv: list[str] | None = None) -> int:
     from reference_model.solvers import ConstraintSolveError
 
     try:
-        args = build_parser().parse_args(argv)
+        argv = list(sys.argv[1:] if argv is None else argv)
+        args = build_parser().parse_args(_join_signed_values(argv))
         return args.func(args)
     except (UsageError, ParameterError, UnknownScenarioError) as exc:
         print(f"bicycle-xval: error: {exc}", file=sys.stderr)
