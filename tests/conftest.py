@@ -1,4 +1,8 @@
-"""Shared pytest configuration: deterministic hypothesis runs, the two named models."""
+"""Shared pytest configuration: deterministic hypothesis runs, the two named models, and the
+one quick report the report and CLI tests read (run once per session: a report run is the
+suite's most expensive object)."""
+
+import json
 
 import pytest
 from hypothesis import settings
@@ -19,3 +23,12 @@ def thesis():
 def disc():
     """The thesis parameters with the true disc front contact."""
     return load_model("thesis-disc")
+
+
+@pytest.fixture(scope="session")
+def quick_report(tmp_path_factory):
+    """``bicycle-xval run --quick`` once: (output folder, exit status, summary.json)."""
+    from comparisons.cli import main
+    out = tmp_path_factory.mktemp("quick-report")
+    code = main(["run", "--quick", "--out", str(out)])
+    return out, code, json.loads((out / "summary.json").read_text(encoding="utf-8"))

@@ -164,10 +164,10 @@ def test_models_lists_thesis_and_disc(capsys):
 # --------------------------------------------------------------------------------------------
 # the report
 # --------------------------------------------------------------------------------------------
-def test_run_quick_writes_the_report(tmp_path, capsys):
-    out = tmp_path / "report"
-    code, stdout, err = run(capsys, "run", "--quick", "--out", out)
-    assert code == 0, err
+def test_run_quick_writes_the_report(quick_report):
+    """The session's quick report (tests/conftest.py), run once for every report test."""
+    out, code, _ = quick_report
+    assert code == 0
     assert (out / "report.md").read_text().startswith("#")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenarios"] and all(s["status"] != "failed" for s in summary["scenarios"])

@@ -13,14 +13,15 @@ VERDICTS = {"reproduced", "not reproduced", "partly", "not assessed"}
 
 
 @pytest.fixture(scope="module")
-def quick_report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("report")
-    assert main(["run", "--quick", "--out", str(out)]) == 0
-    return out, json.loads((out / "summary.json").read_text())
+def report(quick_report):
+    """The session's quick report (tests/conftest.py): (folder, summary)."""
+    out, code, summary = quick_report
+    assert code == 0
+    return out, summary
 
 
-def test_summary_carries_the_contract_keys(quick_report):
-    _, summary = quick_report
+def test_summary_carries_the_contract_keys(report):
+    _, summary = report
     assert summary["engines"] == ["reference", "pinocchio", "exudyn"]
     assert {"comparisons", "claims", "faults", "environment"} <= set(summary)
     assert summary["comparisons"], "no engine comparison in the summary"
@@ -35,8 +36,8 @@ def test_summary_carries_the_contract_keys(quick_report):
     assert "pin" in env["packages"] and "exudyn" in env["packages"]
 
 
-def test_pinocchio_terms_all_pass_and_name_their_worst_entry(quick_report):
-    _, summary = quick_report
+def test_pinocchio_terms_all_pass_and_name_their_worst_entry(report):
+    _, summary = report
     terms = [c for c in summary["comparisons"] if c["engines"] == ["reference", "pinocchio"]
              and c["scenario"].startswith("random-states")]
     by_model = {}
@@ -48,10 +49,10 @@ def test_pinocchio_terms_all_pass_and_name_their_worst_entry(quick_report):
     assert all(c["localized_to"] for c in terms)
 
 
-def test_every_engine_runs_every_scenario_it_can(quick_report):
+def test_every_engine_runs_every_scenario_it_can(report):
     """Inverse scenarios on the reference and Pinocchio, forward ones on all three; Exudyn's
     inverse runs are recorded as not run (it has no inverse dynamics), not dropped."""
-    _, summary = quick_report
+    _, summary = report
     runs = {(r["engine"], r["scenario"]): r["status"] for r in summary["engine_runs"]}
     for sc in ("check", "zigzag"):
         assert runs[("reference", sc)] == runs[("pinocchio", sc)] == "completed"
@@ -60,25 +61,25 @@ def test_every_engine_runs_every_scenario_it_can(quick_report):
                for e in ("reference", "pinocchio", "exudyn-tree"))
 
 
-def test_inverse_dynamics_torques_and_multipliers_compared_per_engine(quick_report):
-    _, summary = quick_report
+def test_inverse_dynamics_torques_and_multipliers_compared_per_engine(report):
+    _, summary = report
     got = {(c["quantity"], c["scenario"]) for c in summary["comparisons"]
            if c["engines"] == ["reference", "pinocchio"]}
     assert {("torques", "zigzag"), ("multipliers", "zigzag"), ("torques", "check"),
             ("multipliers", "check"), ("mass_matrix", "zigzag")} <= got
 
 
-def test_check_claim_holds_on_the_engines_with_inverse_dynamics(quick_report):
+def test_check_claim_holds_on_the_engines_with_inverse_dynamics(report):
     """The analytic result Mped = cv (R psi_dot)^2 R (thesis 5.3) is exact: every engine with
     inverse dynamics must reproduce it."""
-    _, summary = quick_report
+    _, summary = report
     verdict = {c["engine"]: c["verdict"] for c in summary["claims"]
                if c["claim_id"] == "check-pedal-torque"}
     assert verdict["reference"] == verdict["pinocchio"] == "reproduced"
 
 
-def test_faults_are_detected_and_localized(quick_report):
-    _, summary = quick_report
+def test_faults_are_detected_and_localized(report):
+    _, summary = report
     ids = {f["fault"] for f in summary["faults"]}
     assert {"I3xz-sign", "I2xx-I2yy-swapped", "com-offset-1mm", "z3-0.39647",
             "gyroscopic-dropped", "contact-switched"} <= ids
@@ -91,10 +92,10 @@ def test_faults_are_detected_and_localized(quick_report):
     assert all(f["verdict"] == "localized" for k, f in exu.items() if k != "contact-switched")
 
 
-def test_report_starts_with_the_verdict_then_claims_then_summary(quick_report):
+def test_report_starts_with_the_verdict_then_claims_then_summary(report):
     """First screen: the verdict, then (no failures here) the claims, then the summary table;
     every figure drawn is linked."""
-    out, _ = quick_report
+    out, _ = report
     text = (out / "report.md").read_text()
     headings = re.findall(r"^## (.*)$", text, flags=re.M)
     assert text.splitlines()[2].startswith("**All judged comparisons are within tolerance")
@@ -105,8 +106,8 @@ def test_report_starts_with_the_verdict_then_claims_then_summary(quick_report):
     assert "Initial state" in text and "beta corrected by" in text
 
 
-def test_html_is_self_contained(quick_report):
-    out, _ = quick_report
+def test_html_is_self_contained(report):
+    out, _ = report
     html = (out / "report.html").read_text()
     srcs = re.findall(r'src="([^"]+)"', html)
     assert srcs and all(s.startswith("data:image/png;base64,") for s in srcs)
@@ -114,10 +115,10 @@ def test_html_is_self_contained(quick_report):
     assert "<table>" in html and "<link" not in html
 
 
-def test_same_inputs_give_the_same_report(quick_report, tmp_path):
+def test_same_inputs_give_the_same_report(report, tmp_path):
     """Determinism: a second identical run writes byte-identical summary.json and report.md;
     run times live only in timings.json."""
-    out, _ = quick_report
+    out, _ = report
     assert main(["run", "--quick", "--out", str(tmp_path)]) == 0
     for name in ("summary.json", "report.md"):
         assert (out / name).read_text() == (tmp_path / name).read_text(), name
@@ -131,7 +132,7 @@ def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
     tight.write_text(TOLERANCES_FILE.read_text().replace(
         "[mass_matrix]\ntolerance = 1e-12", "[mass_matrix]\ntolerance = 1e-19"))
     out = tmp_path / "r"
-    assert main(["run", "--scenarios", "zigzag", "--engines", "reference,pinocchio",
+    assert main(["run", "--quick", "--scenarios", "zigzag", "--engines", "reference,pinocchio",
                  "--tolerances", str(tight), "--out", str(out)]) == 1
     summary = json.loads((out / "summary.json").read_text())
     assert summary["passed"] is False

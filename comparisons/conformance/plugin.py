@@ -1,0 +1,189 @@
+"""pytest plugin of the conformance suite (entry point ``pytest11``: ``bicycle_xval``).
+
+Options: ``--engine SPEC`` (repeatable: a registered name, ``package.module:Class`` or
+``path/file.py:Class``), ``--engine-option key=value`` (repeatable, for every ``--engine``),
+``--model NAME|FILE`` (repeatable), ``--xfails-file F``. The checks live in the test modules of
+this package; `pytest_generate_tests` parametrizes them over (engine, model[, quantity]) for
+what each engine can do, so a check the engine's capabilities do not allow is never collected
+(and the header says which).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+BUILTIN_ENGINES = ("pinocchio", "exudyn")
+
+
+@dataclass
+class Candidate:
+    """One engine built from one model, or the reason it could not be."""
+
+    spec: str
+    model_name: str
+    engine: object = None
+    reason: str = ""
+
+    @property
+    def id(self) -> str:
+        return f"{_short(self.spec)}-{self.model_name}"
+
+
+@dataclass
+class Conformance:
+    """What this session checks: the candidates (engine x model) and the expected failures."""
+
+    specs: list[str]
+    models: list[str]
+    options: dict
+    candidates: list[Candidate] = field(default_factory=list)
+    xfails: dict[str, str] = field(default_factory=dict)
+    _models: dict = field(default_factory=dict)
+    _references: dict = field(default_factory=dict)
+
+    def model(self, name: str):
+        if name not in self._models:
+            from .models import conformance_model
+            self._models[name] = conformance_model(name)
+        return self._models[name]
+
+    def reference(self, name: str):
+        if name not in self._references:
+            from engines import load_engine
+            self._references[name] = load_engine("reference", self.model(name))
+        return self._references[name]
+
+    def usable(self) -> list[Candidate]:
+        return [c for c in self.candidates if c.engine is not None]
+
+
+def _short(spec: str) -> str:
+    """An id for a spec: the registered name, or the class name of a path/module spec."""
+    return spec.rsplit(":", 1)[-1] if ":" in spec else spec
+
+
+def pytest_addoption(parser):
+    g = parser.getgroup("bicycle-xval", "bicycle-xval engine conformance")
+    g.addoption("--engine", dest="bx_engines", action="append", default=[], metavar="SPEC",
+                help="engine to check: a registered name, package.module:Class or "
+                     "path/file.py:Class (repeatable) [the built-ins: pinocchio, exudyn]")
+    g.addoption("--engine-option", dest="bx_options", action="append", default=[],
+                metavar="KEY=VALUE", help="an option for every --engine (repeatable)")
+    g.addoption("--model", dest="bx_models", action="append", default=[], metavar="NAME|FILE",
+                help="model to check on: a named model or a parameter file (repeatable) "
+                     "[thesis, thesis-disc, benchmark, general, general-disc]")
+    g.addoption("--xfails-file", dest="bx_xfails", default=None, metavar="FILE",
+                help="expected failures: one check id per line, '# reason' after it")
+
+
+def read_xfails(path: Path) -> dict[str, str]:
+    """``{check id: reason}`` from an expected-failures file; a line without a reason is an
+    error (an expected failure is a claim, and a claim states its reason)."""
+    out = {}
+    for k, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        check, _, reason = text.partition("#")
+        if not reason.strip():
+            raise pytest.UsageError(f"--xfails-file {path}, line {k}: {check.strip()!r} has no "
+                                    "reason; write 'CHECK_ID  # why it is expected to fail'")
+        out[check.strip()] = reason.strip()
+    return out
+
+
+def pytest_configure(config):
+    specs = list(config.getoption("bx_engines")) or list(BUILTIN_ENGINES)
+    from .models import DEFAULT_MODELS
+    models = list(config.getoption("bx_models")) or list(DEFAULT_MODELS)
+    options = {}
+    if config.getoption("bx_options"):
+        from engines import parse_engine_options
+        for spec in specs:
+            options[spec] = parse_engine_options(spec, config.getoption("bx_options"))
+    xfails = {}
+    if config.getoption("bx_xfails"):
+        path = Path(config.getoption("bx_xfails"))
+        if not path.is_file():
+            raise pytest.UsageError(f"--xfails-file: no file {str(path)!r}")
+        xfails = read_xfails(path)
+    config._bx_conformance = Conformance(specs, models, options, xfails=xfails)
+    config.addinivalue_line("markers", "conformance: a check of the engine conformance suite")
+
+
+def _conformance(config) -> Conformance:
+    conf = config._bx_conformance
+    if not conf.candidates:          # built once, on first use (collection of a check)
+        from engines import load_engine
+        for spec in conf.specs:
+            for name in conf.models:
+                c = Candidate(spec, name)
+                try:
+                    c.engine = load_engine(spec, conf.model(name), **conf.options.get(spec, {}))
+                except Exception as exc:   # noqa: BLE001 - reported in the header, not a crash
+                    c.reason = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+                conf.candidates.append(c)
+    return conf
+
+
+def pytest_report_header(config):
+    conf = config._bx_conformance
+    if not conf.candidates:
+        return None
+    lines = ["bicycle-xval conformance:"]
+    for c in conf.candidates:
+        what = (", ".join(sorted(c.engine.capabilities)) if c.engine is not None
+                else f"not checked: {c.reason}")
+        lines.append(f"  {c.spec} on {c.model_name}: {what}")
+    return lines
+
+
+def pytest_generate_tests(metafunc):
+    """``candidate`` (an engine on a model) and ``quantity`` are parametrized from what each
+    engine declares; a test names what it needs with ``needs`` (a capability set)."""
+    if "candidate" not in metafunc.fixturenames:
+        return
+    conf = _conformance(metafunc.config)
+    needs = getattr(metafunc.module, "NEEDS", {}).get(metafunc.function.__name__, ())
+    want = getattr(metafunc.function, "needs_method", None)
+    cands = [c for c in conf.usable() if set(needs) <= set(c.engine.capabilities)
+             and (want is None or callable(getattr(c.engine, want, None)))]
+    if "quantity" in metafunc.fixturenames:
+        from ..judgments.terms import QUANTITIES
+        pairs = [(c, q) for c in cands for q in QUANTITIES if c.engine.supports(q)]
+        metafunc.parametrize(("candidate", "quantity"), pairs, scope="session",
+                             ids=[f"{c.id}-{q}" for c, q in pairs])
+    else:
+        metafunc.parametrize("candidate", cands, scope="session", ids=[c.id for c in cands])
+
+
+@pytest.fixture(scope="session")
+def conformance(request) -> Conformance:
+    return _conformance(request.config)
+
+
+@pytest.fixture(scope="session")
+def reference(conformance, candidate):
+    """The reference engine built from the candidate's model."""
+    return conformance.reference(candidate.model_name)
+
+
+def pytest_collection_modifyitems(config, items):
+    conf = getattr(config, "_bx_conformance", None)
+    if conf is None or not conf.xfails:
+        return
+    seen = set()
+    for item in items:
+        reason = conf.xfails.get(item.name) or conf.xfails.get(item.nodeid)
+        if reason is not None:
+            seen.add(item.name if item.name in conf.xfails else item.nodeid)
+            item.add_marker(pytest.mark.xfail(reason=reason, strict=True))
+    unknown = sorted(set(conf.xfails) - seen)
+    if unknown:
+        warnings.warn(pytest.PytestConfigWarning(
+            f"--xfails-file lists {len(unknown)} check id(s) that match no collected check, "
+            f"e.g. {unknown[0]!r}"))

@@ -1,0 +1,110 @@
+"""The conformance checks: an engine against the reference built from the same parameters.
+
+Each check is parametrized by the plugin (`plugin.py`) over the engines and models given on
+the command line and only where the engine's capabilities allow it. Tolerances, each with the
+reason for its size, come from `comparisons/judgments/tolerances.toml`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from comparisons.judgments.terms import States, compare_term, random_states
+from comparisons.judgments.tolerances import load_tolerances
+
+TOLERANCES = load_tolerances()
+SWEEP_STATES = 200
+#: checks that need capabilities beyond the quantity's own
+NEEDS = {"test_zigzag_torques_and_multipliers": ("mass_matrix", "generalized_forces",
+                                                 "constraint_jacobian", "constraint_bias"),
+         "test_trajectory_to_the_meaningful_horizon": ("simulate",)}
+
+angle = st.floats(-np.pi, np.pi)
+state = st.tuples(
+    st.lists(st.floats(-10, 10), min_size=2, max_size=2),           # xc, yc [m]
+    angle, st.floats(-1.3, 1.3), angle, st.floats(-0.6, 0.6),         # phi, theta, psi, beta [rad]
+    st.one_of(st.floats(-1.5, 1.5), st.sampled_from([-1.5707, 1.5707, 1.57])),  # gamma, incl. +-pi/2
+    angle,                                                             # eps [rad]
+    st.lists(st.floats(-30, 30), min_size=8, max_size=8),              # rates, incl. fast spins
+    st.lists(st.floats(-10, 10), min_size=8, max_size=8),              # accelerations
+    st.lists(st.floats(-20, 20), min_size=3, max_size=3),              # torques [N m]
+)
+
+
+def _states(s) -> States:
+    (xy, phi, theta, psi, beta, gamma, eps, dq, ddq, T) = s
+    q = np.array([[*xy, phi, theta, psi, beta, gamma, eps]])
+    return States(q, np.array([dq]), np.array([ddq]), np.array([T]))
+
+
+@settings(max_examples=25, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(s=state)
+def test_term_at_hypothesis_states(candidate, reference, quantity, s):
+    """Each term at hypothesis-generated states: large angles, fast spins, steer near +-pi/2."""
+    res = compare_term(quantity, reference, candidate.engine, _states(s), TOLERANCES[quantity])
+    assert res.passed, res.describe()
+
+
+def test_term_sweep(candidate, reference, quantity):
+    """Each term over 200 deterministic states (reproducible numbers for a report)."""
+    res = compare_term(quantity, reference, candidate.engine, random_states(SWEEP_STATES, seed=7),
+                       TOLERANCES[quantity])
+    assert res.passed, res.describe()
+
+
+def test_zigzag_torques_and_multipliers(candidate, conformance):
+    """The thesis's zig-zag through the engine's terms in the 13x13 inverse dynamics (the
+    engine's own inverse kinematics on its D) gives the reference's rider torques and
+    multipliers within [torques] and [multipliers] of tolerances.toml."""
+    from reference_model.scenarios import SCENARIOS, run_inverse
+    eng = candidate.engine
+    sc = SCENARIOS["zigzag"]
+    ref = run_inverse(conformance.model(candidate.model_name), sc)
+    got = eng.run_inverse(sc)
+    for name, a, b in (("torques", ref.T, got.T), ("multipliers", ref.lam, got.lam)):
+        tol = TOLERANCES[name]
+        err = float(np.abs(b - a).max()) / tol.normalizer(a)
+        k, i = np.unravel_index(int(np.argmax(np.abs(b - a))), a.shape)
+        assert err <= tol.tolerance, (f"{name}: error {err:.2e} > {tol.tolerance:g} ({tol.scale}) "
+                                      f"at column {i}, t = {ref.motion.t[k]:.2f} s")
+
+
+test_zigzag_torques_and_multipliers.needs_method = "run_inverse"   # collected only where offered
+
+
+#: the forward scenarios and how much of each is run (s): the stability run to its fall, the
+#: replay's first second (the meaningful horizon of its unstable motion is shorter anyway)
+TRAJECTORIES = {"stability-psid5": None, "replay": 1.0}
+
+
+@pytest.mark.parametrize("scenario", list(TRAJECTORIES))
+def test_trajectory_to_the_meaningful_horizon(candidate, conformance, scenario):
+    """The engine's own forward run against the reference's (DOP853, rtol 1e-11, projection),
+    all eight coordinates up to the meaningful horizon (two reference runs 1e-9 rad/s apart in
+    theta_dot(0) part by 1e-6; beyond it no comparison means anything), within
+    [trajectory_conformance] of tolerances.toml."""
+    from reference_model.scenarios import SCENARIOS
+
+    from comparisons.judgments.convergence import error_vs_time, reference_horizon, reference_run
+    from reference_model import COORDINATES
+    model = conformance.model(candidate.model_name)
+    sc = SCENARIOS[scenario]
+    if TRAJECTORIES[scenario] is not None:
+        start, step, _ = sc.grid
+        sc = dataclasses.replace(sc, grid=(start, step, int(round(TRAJECTORIES[scenario] / step)) + 1))
+    ref = reference_run(model, sc)
+    horizon = reference_horizon(model, sc, reference=ref)
+    traj = candidate.engine.simulate(sc)
+    assert traj.status != "failed", f"{candidate.spec} failed: {traj.message}"
+    err = error_vs_time(ref, traj, coords=COORDINATES, horizon=horizon.t)
+    tol = TOLERANCES["trajectory_conformance"]
+    k = int(np.argmax(err["max"]))
+    worst = max(COORDINATES, key=lambda c: err[c][k])
+    assert err["max"].max() <= tol.tolerance, (
+        f"{scenario}: max error {err['max'].max():.2e} > {tol.tolerance:g} rad or m, worst "
+        f"{worst} at t = {err['t'][k]:.2f} s (horizon {horizon.t:.2f} s: {horizon.reason})")
