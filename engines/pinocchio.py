@@ -16,25 +16,27 @@ What comes from Pinocchio and what from here:
 * M from ``crba`` (upper triangle, symmetrised); ``rnea(q, v, a) = M a - Qv - Qgrav``;
   gravity from ``computeGeneralizedGravity`` (= -Qgrav); Qv + Qgrav = -``nonLinearEffects``.
 * Rolling constraints: Pinocchio has no rolling contact, so D is assembled from the
-  world-frame joint Jacobian J (``computeJointJacobians``) shifted to the current contact
+  world-frame joint Jacobian J (``computeAllTerms`` fills it) shifted to the current contact
   points: for a material point p of body b, J_p = [I, -skew(p)] J_b (J_b: J with the columns
   outside b's support zeroed). The rear contact rC is taken on the rear wheel, the front
   contact rD on the front wheel (the thesis's fork-axis point or the disc's lowest point, per
   the model's contact variant); the holonomic row is the vertical velocity of the fork's
   material point at rD (for the thesis contact rD is fixed in the fork; for the disc the rim
-  slides through rD horizontally, so the vertical rate is the same). dD dq from the Jacobian's
-  time variation dJ (``computeJointJacobiansTimeVariation``) plus the contact point's own
-  motion: for a material point of body b at a moving point p(q),
-  d/dt (J_p dq)|_{ddq=0} = [I, -skew(p)] dJ_b dq + w_b x dp/dt.
+  slides through rD horizontally, so the vertical rate is the same). dD dq from the bodies'
+  spatial accelerations at ddq = 0 (Pinocchio's ``data.a``, taken to the world frame: A_b =
+  dJ_b dq) plus the contact point's own motion: for a material point of body b at a moving
+  point p(q), d/dt (J_p dq)|_{ddq=0} = a_O + alpha x p + w_b x dp/dt, with
+  (a_O, alpha) = A_b and (v_O, w_b) the body's spatial velocity (``data.ov``).
 * Drag as a force at the frame's CoM through its point Jacobian; rider torques as
   single-body torques through the body-axis angular Jacobians (single-sided, as the thesis).
 * Forward dynamics: the KKT system [M D'; D 0] is solved by Pinocchio's ``forwardDynamics``
-  (in C++, M and the nonlinear effects from its own ``computeAllTerms``), fed with D and the
-  drift dD dq + 2 a1 D dq + a2^2 C assembled here.
+  (in C++: Cholesky of M and of D M^-1 D^T, with M and the nonlinear effects of the same
+  ``computeAllTerms`` call), fed with D and the drift dD dq + 2 a1 D dq + a2^2 C assembled here.
 
 Speed: the right-hand side a forward run evaluates once per integrator stage is one
-kinematics pass, a handful of small numpy products over all five points at once (no per-point
-Python loop) and one ``forwardDynamics`` call; everything that depends only on the model
+``computeAllTerms``, one small product W @ J giving D and the applied forces together (no
+per-point numpy calls: the 3-vector algebra is plain float arithmetic, cheaper than a numpy
+call at this size) and one ``forwardDynamics`` call; everything that depends only on the model
 (support masks, the point-operator layout) is built once in the constructor.
 
 The engine also offers the duck-typed methods the reference solvers use (``forward``,
@@ -115,8 +117,8 @@ def build_pinocchio_model(model: Model) -> "pin.Model":
 
 # Bodies whose spatial velocity (v_O, w) in the world frame the right-hand side needs: v_O is
 # the velocity of the body's point at the world origin, so a material point p moves at
-# v_O + w x p. Each body's velocity is J_b dq, J_b the world Jacobian with the columns outside
-# the body's support zeroed.
+# v_O + w x p. It is J_b dq (J_b the world Jacobian with the columns outside the body's support
+# zeroed), which Pinocchio keeps as data.ov.
 BODIES = (J_PSI, J_BETA, J_GAMMA, J_EPS)     # rear wheel, frame, fork, front wheel
 # Rows of the operator W (8, 6) with (W @ J) masked row by row to each row's body: rows 0-4 are
 # D ([I, -skew(p)] rows of a point's velocity), rows 5-7 the generalised forces of the applied
@@ -142,6 +144,20 @@ def _at(V, p) -> tuple[float, float, float]:
     vx, vy, vz, wx, wy, wz = V
     px, py, pz = p
     return (vx + wy * pz - wz * py, vy + wz * px - wx * pz, vz + wx * py - wy * px)
+
+
+def _to_world(a, R, o) -> tuple[float, ...]:
+    """A motion vector (linear, angular) in a body's frame -> world frame at the world origin:
+    alpha = R a_ang, a_O = R a_lin + o x alpha (R, o: the body's placement, lists)."""
+    l0, l1, l2, w0, w1, w2 = a
+    r0, r1, r2 = R
+    x = r0[0] * w0 + r0[1] * w1 + r0[2] * w2
+    y = r1[0] * w0 + r1[1] * w1 + r1[2] * w2
+    z = r2[0] * w0 + r2[1] * w1 + r2[2] * w2
+    ox, oy, oz = o
+    return (r0[0] * l0 + r0[1] * l1 + r0[2] * l2 + oy * z - oz * y,
+            r1[0] * l0 + r1[1] * l1 + r1[2] * l2 + oz * x - ox * z,
+            r2[0] * l0 + r2[1] * l1 + r2[2] * l2 + ox * y - oy * x, x, y, z)
 
 
 def _rate_at(A, V, p, dp) -> tuple[float, float, float]:
@@ -175,20 +191,24 @@ class PinocchioEngine(Engine):
         self.params, self.contact = p, model.contact
         self.coordinates = COORDINATES
         # what depends on the model only
-        self._body_mask = np.column_stack([_support_mask(pm, j) for j in BODIES])
         self._row_mask = np.vstack([_support_mask(pm, j) for j in ROW_BODIES])
         self._torque_mask = np.column_stack([_support_mask(pm, j) for j, _ in TORQUE_AXES])
         self._wrench_rows = np.array([0.0] * N_C + [1.0] * (len(ROW_BODIES) - N_C))
         self._zeros = np.zeros(N_Q)
+        self._W = np.zeros((len(ROW_BODIES), 6))      # the operator W, refilled every call
+        self._W_flat = self._W.ravel()
         self._no_torque = np.zeros(3)
         # Views into self.data's buffers (never reallocated: Data has fixed sizes once created),
         # refreshed by every kinematics call; read, never written, and never handed out.
-        self._J, self._dJ = d.J, d.dJ                  # world-frame Jacobian and its rate (6, 8)
+        self._J = d.J                                  # world-frame joint Jacobian (6, 8)
         self._t5 = d.oMi[J_EPS].translation            # front wheel centre rG5
         self._R4 = d.oMi[J_GAMMA].rotation             # fork axes
         self._t3, self._R3 = d.oMi[J_BETA].translation, d.oMi[J_BETA].rotation
         self._R2 = d.oMi[J_PSI].rotation               # rear wheel axes
         self._ov = [d.ov[j].vector for j in BODIES]    # spatial velocities (v_O, w), world
+        # local spatial accelerations at ddq = 0 with each body's placement (rear, fork, front)
+        self._acc = [(d.a[j].vector, d.oMi[j].rotation, d.oMi[j].translation)
+                     for j in (J_PSI, J_GAMMA, J_EPS)]
 
     # -- batching ----------------------------------------------------------------------
     @staticmethod
@@ -222,15 +242,18 @@ class PinocchioEngine(Engine):
 
     # -- kinematics: constraints and applied forces in one pass --------------------------
     def _kinematics(self, q, dq, T, with_bias: bool):
-        """One kinematics pass (placements, spatial velocities, world Jacobian J and its rate
-        dJ) and from it everything the right-hand side needs besides M and the nonlinear effects.
+        """One ``computeAllTerms`` pass (placements, world Jacobian J, spatial velocities and
+        accelerations at ddq = 0, and M and the nonlinear effects, left in self.data for
+        ``forwardDynamics``) and from it C, D, dD dq and the applied forces.
 
         Returns (C, D, D dq, dD dq, Q): C, D dq and dD dq as lists of 5 floats (dD dq None
         unless ``with_bias``), D (5, 8), Q = Qaero + S T (8,).
         """
         pm, d = self.pin_model, self.data
-        pin.computeJointJacobiansTimeVariation(pm, d, q, dq)   # also the bodies' velocities
-        v2, v3, v4, v5 = (v.tolist() for v in self._ov)   # spatial velocities (v_O, w)
+        # placements, world Jacobian, spatial velocities and accelerations at ddq = 0, M, nle
+        pin.computeAllTerms(pm, d, q, dq)
+        ov = self._ov                                    # spatial velocities (v_O, w)
+        v2, v3, v4, v5 = ov[0].tolist(), ov[1].tolist(), ov[2].tolist(), ov[3].tolist()
         R4, Rf = self._R4.tolist(), self._R_front
         rG5 = tuple(self._t5.tolist())
         if self._disc:   # lowest point of the disc: rG5 - R u, u = n/|n|, n = e_z - a_z a
@@ -257,7 +280,7 @@ class PinocchioEngine(Engine):
         m3 = _cross3(rG3, f)
         T0, T1, T2 = T.tolist()
         R2 = self._R2.tolist()
-        W = np.array([
+        self._W_flat[:] = [
             0.0, 0.0, 1.0, rD[1], -rD[0], 0.0,            # D: fork at rD, z
             1.0, 0.0, 0.0, 0.0, rC[2], -rC[1],            # rear wheel at rC, x
             0.0, 1.0, 0.0, -rC[2], 0.0, rC[0],            # rear wheel at rC, y
@@ -266,27 +289,33 @@ class PinocchioEngine(Engine):
             f[0], f[1], f[2], m3[0] + T2 * R3[0][0], m3[1] + T2 * R3[1][0], m3[2] + T2 * R3[2][0],
             0.0, 0.0, 0.0, T0 * R4[0][2], T0 * R4[1][2], T0 * R4[2][2],
             0.0, 0.0, 0.0, T1 * R2[0][1], T1 * R2[1][1], T1 * R2[2][1],
-        ]).reshape(8, 6)
-        WJ = (W @ self._J) * self._row_mask
+        ]
+        WJ = (self._W @ self._J) * self._row_mask
         D, Q = WJ[:5], self._wrench_rows @ WJ
         if not with_bias:
             return C, D, Ddq, None, Q
-        # spatial accelerations at ddq = 0 of each body: dJ dq over the body's support
-        a2, _, a4, a5 = ((self._dJ * dq) @ self._body_mask).T.tolist()
+        # spatial accelerations at ddq = 0 (= dJ_b dq), from the local ones in data.a
+        (a2, _, o2), (a4, _, o4), (a5, R5, _) = self._acc
+        a2 = _to_world(a2.tolist(), R2, o2.tolist())
+        a4 = _to_world(a4.tolist(), R4, o4.tolist())
+        a5 = _to_world(a5.tolist(), R5.tolist(), rG5)
         dl = dq.tolist()
         pC = (dl[0], dl[1], 0.0)
-        if self._disc:
+        if self._disc:   # u(a(q)) and its first two rates, from the fork's w and alpha
             w4, al4 = v4[3:], a4[3:]
             da = _cross3(w4, a)
             dda = _add3(_cross3(al4, a), _cross3(w4, da))
-            dn = [-(da[2] * a[i] + a[2] * da[i]) for i in range(3)]
-            ddn = [-(dda[2] * a[i] + 2 * da[2] * da[i] + a[2] * dda[i]) for i in range(3)]
+            az, daz, ddaz = a[2], da[2], dda[2]
+            dn = (-(daz * a[0] + az * da[0]), -(daz * a[1] + az * da[1]), -(daz * az + az * daz))
+            ddn_z = -(ddaz * az + 2 * daz * daz + az * ddaz)
             dm = _dot3(u, dn)
-            du = [(dn[i] - u[i] * dm) / m for i in range(3)]
+            du = ((dn[0] - u[0] * dm) / m, (dn[1] - u[1] * dm) / m, (dn[2] - u[2] * dm) / m)
+            ddn = (-(ddaz * a[0] + 2 * daz * da[0] + az * dda[0]),
+                   -(ddaz * a[1] + 2 * daz * da[1] + az * dda[1]), ddn_z)
             ddm = _dot3(du, dn) + _dot3(u, ddn)
-            ddu_z = (ddn[2] - 2 * du[2] * dm - u[2] * ddm) / m
+            ddu_z = (ddn_z - 2 * du[2] * dm - u[2] * ddm) / m
             vG5 = _at(v5, rG5)
-            pD = [vG5[i] - Rf * du[i] for i in range(3)]
+            pD = (vG5[0] - Rf * du[0], vG5[1] - Rf * du[1], vG5[2] - Rf * du[2])
             b0 = _rate_at(a5, v5, rG5, vG5)[2] - Rf * ddu_z     # d2/dt2 of rD_z
         else:            # rD is fixed in the fork
             pD = vD4
@@ -335,7 +364,7 @@ class PinocchioEngine(Engine):
         gamma = np.array([bias[0] + k1 * Ddq[0] + k2 * C[0], bias[1] + k1 * Ddq[1] + k2 * C[1],
                           bias[2] + k1 * Ddq[2] + k2 * C[2], bias[3] + k1 * Ddq[3] + k2 * C[3],
                           bias[4] + k1 * Ddq[4] + k2 * C[4]])
-        ddq = pin.forwardDynamics(self.pin_model, self.data, q, dq, tau, D, gamma)
+        ddq = pin.forwardDynamics(self.pin_model, self.data, tau, D, gamma)   # M, nle as above
         lam = -self.data.lambda_c
         if math.isfinite(sum(ddq.tolist()) + sum(lam.tolist())):
             return ddq, lam, 0
