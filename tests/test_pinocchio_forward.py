@@ -10,7 +10,6 @@ here against the reference model (the thesis's equations, generated C).
 import numpy as np
 import pytest
 
-from comparisons.terms import random_states
 from engines import load_engine
 from reference_model import load_model
 from reference_model.solvers import THESIS_BAUMGARTE
@@ -20,6 +19,14 @@ from reference_model.solvers import THESIS_BAUMGARTE
 # ~1e-12 expected (measured: 2e-13 for ddq, 8e-14 for lambda); 1e-9 keeps the margin of the
 # conformance suite's forward_acceleration tolerance.
 RTOL = 1e-9
+
+
+def random_states(n: int, seed: int):
+    """Seeded states covering large lean, steer near +-pi/2 and fast spins (as the conformance
+    suite's), with rider torques: (q, dq, T)."""
+    rng = np.random.default_rng(seed)
+    lo = np.array([-10, -10, -np.pi, -1.2, -np.pi, -0.5, -1.55, -np.pi])
+    return rng.uniform(lo, -lo, (n, 8)), rng.uniform(-20, 20, (n, 8)), rng.uniform(-10, 10, (n, 3))
 
 
 @pytest.fixture(scope="module", params=("thesis", "thesis-disc"))
@@ -36,8 +43,8 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
 @pytest.mark.parametrize("baumgarte", [(0.0, 0.0), THESIS_BAUMGARTE])
 def test_forward_matches_reference_with_multipliers(engines, baumgarte):
     model, pin = engines
-    s = random_states(60, seed=21)
-    ref, got = model.forward(s.q, s.dq, s.T, baumgarte), pin.forward(s.q, s.dq, s.T, baumgarte)
+    q, dq, T = random_states(60, seed=21)
+    ref, got = model.forward(q, dq, T, baumgarte), pin.forward(q, dq, T, baumgarte)
     assert np.all(ref.status == 0) and np.all(got.status == 0)
     assert _rel(ref.ddq, got.ddq) <= RTOL
     assert _rel(ref.lam, got.lam) <= RTOL
@@ -47,19 +54,18 @@ def test_single_state_call_is_the_batched_one(engines):
     """The single-state path (what the integrator calls) returns fresh arrays equal to the
     batch's rows: a later call must not overwrite an earlier result (Pinocchio's buffers)."""
     _, pin = engines
-    s = random_states(3, seed=22)
-    first = pin.forward(s.q[0], s.dq[0], s.T[0], THESIS_BAUMGARTE)
+    q, dq, T = random_states(3, seed=22)
+    first = pin.forward(q[0], dq[0], T[0], THESIS_BAUMGARTE)
     kept = first.ddq.copy(), first.lam.copy()
-    pin.forward(s.q[1], s.dq[1], s.T[1], THESIS_BAUMGARTE)
+    pin.forward(q[1], dq[1], T[1], THESIS_BAUMGARTE)
     np.testing.assert_array_equal(first.ddq, kept[0])
     np.testing.assert_array_equal(first.lam, kept[1])
-    batch = pin.forward(s.q, s.dq, s.T, THESIS_BAUMGARTE)
+    batch = pin.forward(q, dq, T, THESIS_BAUMGARTE)
     np.testing.assert_array_equal(batch.ddq[0], kept[0])
 
 
 def test_non_finite_state_reports_status_2_without_raising(engines):
     _, pin = engines
-    s = random_states(1, seed=23)
-    q = s.q[0].copy()
-    q[3] = np.nan
-    assert pin.forward(q, s.dq[0], s.T[0]).status.tolist() == [2]
+    q, dq, T = random_states(1, seed=23)
+    q[0, 3] = np.nan
+    assert pin.forward(q[0], dq[0], T[0]).status.tolist() == [2]
