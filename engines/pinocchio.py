@@ -146,30 +146,22 @@ def _at(V, p) -> tuple[float, float, float]:
     return (vx + wy * pz - wz * py, vy + wz * px - wx * pz, vz + wx * py - wy * px)
 
 
-def _to_world(a, R, o) -> tuple[float, ...]:
-    """A motion vector (linear, angular) in a body's frame -> world frame at the world origin:
-    alpha = R a_ang, a_O = R a_lin + o x alpha (R, o: the body's placement, lists)."""
-    l0, l1, l2, w0, w1, w2 = a
-    r0, r1, r2 = R
-    x = r0[0] * w0 + r0[1] * w1 + r0[2] * w2
-    y = r1[0] * w0 + r1[1] * w1 + r1[2] * w2
-    z = r2[0] * w0 + r2[1] * w1 + r2[2] * w2
-    ox, oy, oz = o
-    return (r0[0] * l0 + r0[1] * l1 + r0[2] * l2 + oy * z - oz * y,
-            r1[0] * l0 + r1[1] * l1 + r1[2] * l2 + oz * x - ox * z,
-            r2[0] * l0 + r2[1] * l1 + r2[2] * l2 + ox * y - oy * x, x, y, z)
-
-
-def _rate_at(A, V, p, dp) -> tuple[float, float, float]:
+def _rate_at(a, R, o, V, p, dp) -> tuple[float, float, float]:
     """d/dt (J_p dq) at ddq = 0 for a body's point p moving at dp: a_O + alpha x p + w x dp,
-    with A = dJ_b dq = (a_O, alpha) the body's spatial acceleration at ddq = 0."""
-    ax, ay, az, lx, ly, lz = A
+    where (a_O, alpha) = dJ_b dq is the body's world spatial acceleration at ddq = 0, here from
+    Pinocchio's local one a = (a_lin, a_ang) and the body's placement (R, o):
+    alpha = R a_ang, a_O + alpha x p = R a_lin + alpha x (p - o). V = (v_O, w)."""
+    l0, l1, l2, u0, u1, u2 = a
+    r0, r1, r2 = R
+    x = r0[0] * u0 + r0[1] * u1 + r0[2] * u2
+    y = r1[0] * u0 + r1[1] * u1 + r1[2] * u2
+    z = r2[0] * u0 + r2[1] * u1 + r2[2] * u2
+    px, py, pz = p[0] - o[0], p[1] - o[1], p[2] - o[2]
     wx, wy, wz = V[3], V[4], V[5]
-    px, py, pz = p
     dx, dy, dz = dp
-    return (ax + ly * pz - lz * py + wy * dz - wz * dy,
-            ay + lz * px - lx * pz + wz * dx - wx * dz,
-            az + lx * py - ly * px + wx * dy - wy * dx)
+    return (r0[0] * l0 + r0[1] * l1 + r0[2] * l2 + y * pz - z * py + wy * dz - wz * dy,
+            r1[0] * l0 + r1[1] * l1 + r1[2] * l2 + z * px - x * pz + wz * dx - wx * dz,
+            r2[0] * l0 + r2[1] * l1 + r2[2] * l2 + x * py - y * px + wx * dy - wy * dx)
 
 
 class PinocchioEngine(Engine):
@@ -294,15 +286,14 @@ class PinocchioEngine(Engine):
         D, Q = WJ[:5], self._wrench_rows @ WJ
         if not with_bias:
             return C, D, Ddq, None, Q
-        # spatial accelerations at ddq = 0 (= dJ_b dq), from the local ones in data.a
+        # spatial accelerations at ddq = 0 (= dJ_b dq): Pinocchio's local ones in data.a
         (a2, _, o2), (a4, _, o4), (a5, R5, _) = self._acc
-        a2 = _to_world(a2.tolist(), R2, o2.tolist())
-        a4 = _to_world(a4.tolist(), R4, o4.tolist())
-        a5 = _to_world(a5.tolist(), R5.tolist(), rG5)
         dl = dq.tolist()
         pC = (dl[0], dl[1], 0.0)
+        R5, a5 = R5.tolist(), a5.tolist()
         if self._disc:   # u(a(q)) and its first two rates, from the fork's w and alpha
-            w4, al4 = v4[3:], a4[3:]
+            w4, (l0, l1, l2) = v4[3:], a4.tolist()[3:]
+            al4 = tuple(r[0] * l0 + r[1] * l1 + r[2] * l2 for r in R4)
             da = _cross3(w4, a)
             dda = _add3(_cross3(al4, a), _cross3(w4, da))
             az, daz, ddaz = a[2], da[2], dda[2]
@@ -316,11 +307,12 @@ class PinocchioEngine(Engine):
             ddu_z = (ddn_z - 2 * du[2] * dm - u[2] * ddm) / m
             vG5 = _at(v5, rG5)
             pD = (vG5[0] - Rf * du[0], vG5[1] - Rf * du[1], vG5[2] - Rf * du[2])
-            b0 = _rate_at(a5, v5, rG5, vG5)[2] - Rf * ddu_z     # d2/dt2 of rD_z
+            b0 = _rate_at(a5, R5, rG5, v5, rG5, vG5)[2] - Rf * ddu_z     # d2/dt2 of rD_z
         else:            # rD is fixed in the fork
             pD = vD4
-            b0 = _rate_at(a4, v4, rD, vD4)[2]
-        bC, bD = _rate_at(a2, v2, rC, pC), _rate_at(a5, v5, rD, pD)
+            b0 = _rate_at(a4.tolist(), R4, o4.tolist(), v4, rD, vD4)[2]
+        bC = _rate_at(a2.tolist(), R2, o2.tolist(), v2, rC, pC)
+        bD = _rate_at(a5, R5, rG5, v5, rD, pD)
         return C, D, Ddq, [b0, bC[0], bC[1], bD[0], bD[1]], Q
 
     def _S(self):
