@@ -365,7 +365,12 @@ class PinocchioEngine(Engine):
         return ddq, lam, 1 if finite else 2
 
     def forward(self, q, dq, torques=(0.0, 0.0, 0.0), baumgarte=(0.0, 0.0)) -> ForwardResult:
-        """[M D'; D 0][ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C], all from Pinocchio."""
+        """[M D'; D 0][ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C], all from Pinocchio.
+
+        Status per state: 0 ok, 1 non-finite result from a finite state (a singular
+        D M^-1 D^T), 2 non-finite state. Unlike the reference's pivot test, a merely
+        ill-conditioned system is not flagged (nor was it by the numpy solve used before).
+        """
         a1, a2 = baumgarte
         a1, a2 = float(a1), float(a2)
         q = np.asarray(q, dtype=float)
