@@ -187,8 +187,13 @@ class PinocchioEngine(Engine):
         self._torque_mask = np.column_stack([_support_mask(pm, j) for j, _ in TORQUE_AXES])
         self._wrench_rows = np.array([0.0] * N_C + [1.0] * (len(ROW_BODIES) - N_C))
         self._zeros = np.zeros(N_Q)
-        self._W = np.zeros((len(ROW_BODIES), 6))      # the operator W, refilled every call
-        self._W_flat = self._W.ravel()
+        # the operator W, stored transposed (6, 8) so that what changes per call is contiguous:
+        # the moment rows 3..5 (24 numbers) and the frame's force (column 5 of rows 0..2)
+        self._Wt = np.zeros((6, len(ROW_BODIES)))
+        for col, axis in enumerate((2, 0, 1, 0, 1)):   # D rows: the velocity component taken
+            self._Wt[axis, col] = 1.0
+        self._Wt_moments = self._Wt[3:].ravel()
+        self._Wt_force = self._Wt[:3, N_C]
         self._no_torque = np.zeros(3)
         # Views into self.data's buffers (never reallocated: Data has fixed sizes once created),
         # refreshed by every kinematics call; read, never written, and never handed out.
@@ -272,17 +277,15 @@ class PinocchioEngine(Engine):
         m3 = _cross3(rG3, f)
         T0, T1, T2 = T.tolist()
         R2 = self._R2.tolist()
-        self._W_flat[:] = [
-            0.0, 0.0, 1.0, rD[1], -rD[0], 0.0,            # D: fork at rD, z
-            1.0, 0.0, 0.0, 0.0, rC[2], -rC[1],            # rear wheel at rC, x
-            0.0, 1.0, 0.0, -rC[2], 0.0, rC[0],            # rear wheel at rC, y
-            1.0, 0.0, 0.0, 0.0, rD[2], -rD[1],            # front wheel at rD, x
-            0.0, 1.0, 0.0, -rD[2], 0.0, rD[0],            # front wheel at rD, y
-            f[0], f[1], f[2], m3[0] + T2 * R3[0][0], m3[1] + T2 * R3[1][0], m3[2] + T2 * R3[2][0],
-            0.0, 0.0, 0.0, T0 * R4[0][2], T0 * R4[1][2], T0 * R4[2][2],
-            0.0, 0.0, 0.0, T1 * R2[0][1], T1 * R2[1][1], T1 * R2[2][1],
+        # W's rows (columns of Wt): D rows [e_i, -skew(p)_i] for fork z at rD, rear wheel x, y
+        # at rC, front wheel x, y at rD; wrenches (force, moment about O) on frame, fork, rear
+        self._Wt_moments[:] = [
+            rD[1], 0.0, -rC[2], 0.0, -rD[2], m3[0] + T2 * R3[0][0], T0 * R4[0][2], T1 * R2[0][1],
+            -rD[0], rC[2], 0.0, rD[2], 0.0, m3[1] + T2 * R3[1][0], T0 * R4[1][2], T1 * R2[1][1],
+            0.0, -rC[1], rC[0], -rD[1], rD[0], m3[2] + T2 * R3[2][0], T0 * R4[2][2], T1 * R2[2][1],
         ]
-        WJ = (self._W @ self._J) * self._row_mask
+        self._Wt_force[:] = f
+        WJ = (self._Wt.T @ self._J) * self._row_mask
         D, Q = WJ[:5], self._wrench_rows @ WJ
         if not with_bias:
             return C, D, Ddq, None, Q
