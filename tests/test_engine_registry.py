@@ -1,0 +1,220 @@
+"""Engine discovery and loading: entry points, module and file specs, and their errors.
+
+Third-party engines are simulated without installing anything: a `<dist>-<ver>.dist-info/`
+folder with METADATA and entry_points.txt in a temporary directory on sys.path is exactly what
+`importlib.metadata` reads for an installed distribution.
+"""
+
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import engines
+from engines import (EngineError, EngineLoadError, EngineSpecError, available_engines,
+                     engine_info, load_engine, load_engines)
+from engines.registry import GROUP, _pyproject_registrations
+
+BUILTINS = ("reference", "pinocchio", "exudyn")
+
+FAKE_MODULE = '''
+from engines.base import Engine
+
+class FakeEngine(Engine):
+    """A third party's engine: M only (from the model it was built from)."""
+    name = "fake"
+    capabilities = frozenset({"mass_matrix"})
+    contacts = ("thesis",)
+
+    def __init__(self, model, scale=1.0):
+        super().__init__(model)
+        self.scale = scale
+
+    def mass_matrix(self, q):
+        return self.scale * self.model.mass_matrix(q)
+
+class Lazy(Engine):
+    """Declares D without implementing it."""
+    name = "lazy"
+    capabilities = frozenset({"mass_matrix", "constraint_jacobian"})
+
+    def mass_matrix(self, q):
+        return self.model.mass_matrix(q)
+
+class Boom(Engine):
+    name = "boom"
+    def __init__(self, model):
+        raise RuntimeError("no licence server")
+
+class Typo(Engine):
+    name = "typo"
+    capabilities = frozenset({"mass_matrix", "masmatrix"})
+    def mass_matrix(self, q):
+        return self.model.mass_matrix(q)
+
+NOT_AN_ENGINE = object
+'''
+
+
+def _dist_info(root: Path, dist: str, version: str, entries: dict[str, str]) -> None:
+    info = root / f"{dist.replace('-', '_')}-{version}.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {dist}\nVersion: {version}\n")
+    lines = "".join(f"{k} = {v}\n" for k, v in entries.items())
+    (info / "entry_points.txt").write_text(f"[{GROUP}]\n{lines}")
+
+
+@pytest.fixture
+def third_party(tmp_path, monkeypatch):
+    """A fake installed distribution 'fake-engines 1.2.3' registering four engines."""
+    (tmp_path / "fake_engine_mod.py").write_text(FAKE_MODULE)
+    _dist_info(tmp_path, "fake-engines", "1.2.3", {
+        "fake": "fake_engine_mod:FakeEngine", "lazy": "fake_engine_mod:Lazy",
+        "boom": "fake_engine_mod:Boom", "ghost": "no_such_module_xyz:Ghost",
+        "typo": "fake_engine_mod:Typo"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    return tmp_path
+
+
+def test_builtins_are_discovered_in_declaration_order():
+    assert available_engines()[:3] == BUILTINS
+    assert engines.ENGINES == BUILTINS
+
+
+def test_builtins_come_from_the_pyproject_declaration():
+    """The source-tree fallback reads the same table the installed entry points come from."""
+    regs = {r.name: r.target for r in _pyproject_registrations()}
+    assert regs == {"reference": "engines.reference:ReferenceEngine",
+                    "pinocchio": "engines.pinocchio:PinocchioEngine",
+                    "exudyn": "engines.exudyn:ExudynEngine"}
+
+
+def test_builtin_info_lists_capabilities_contacts_and_options():
+    info = {i.name: i for i in engine_info()}
+    assert set(BUILTINS) <= set(info)
+    assert info["reference"].capabilities == engines.CAPABILITIES
+    assert info["exudyn"].capabilities == ("mass_matrix", "generalized_forces", "simulate")
+    assert "build" in info["exudyn"].options and info["pinocchio"].options == ()
+    assert all(info[n].contacts == ("thesis", "disc") and info[n].error is None for n in BUILTINS)
+    assert info["reference"].source.startswith("bicycle-xval")
+
+
+def test_third_party_entry_point_is_discovered_and_built(third_party, thesis):
+    assert {"fake", "lazy", "boom", "ghost"} <= set(available_engines())
+    assert available_engines()[:3] == BUILTINS          # ours first, then theirs by name
+    info = {i.name: i for i in engine_info()}
+    assert info["fake"].source == "fake-engines 1.2.3"
+    assert info["fake"].capabilities == ("mass_matrix",) and info["fake"].contacts == ("thesis",)
+    assert info["fake"].options == ("scale",)
+    assert "no module 'no_such_module_xyz'" in info["ghost"].error   # listed, not raised
+    eng = load_engine("fake", thesis, scale=2.0)
+    q = np.linspace(-1, 1, 8)
+    np.testing.assert_array_equal(eng.mass_matrix(q), 2.0 * thesis.mass_matrix(q))
+
+
+def test_module_and_file_specs(third_party, thesis):
+    by_module = load_engine("fake_engine_mod:FakeEngine", thesis)
+    by_file = load_engine(f"{third_party / 'fake_engine_mod.py'}:FakeEngine", thesis)
+    assert type(by_module).__name__ == type(by_file).__name__ == "FakeEngine"
+    [info] = engine_info(f"{third_party / 'fake_engine_mod.py'}:FakeEngine")
+    assert info.name == "fake" and info.source == str(third_party / "fake_engine_mod.py")
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("bullet", r"unknown engine 'bullet'; available: reference, pinocchio, exudyn.*spec"),
+    ("fake_engine_mod:", r"malformed.*package.module:Class"),
+    ("fake_engine_mod:1x", r"malformed"),
+    ("fake engine:Fake", r"malformed: 'fake engine' is neither a dotted module"),
+    ("no_such_module_xyz:Ghost", r"no module 'no_such_module_xyz'.*install"),
+    ("fake_engine_mod:Missing", r"no class 'Missing' in .*defines: Boom, FakeEngine, Lazy, Typo"),
+    ("fake_engine_mod:NOT_AN_ENGINE", r"'NOT_AN_ENGINE' .* is not an engines.base.Engine subclass"),
+    ("missing/dir/engine.py:X", r"no file 'missing/dir/engine.py'"),
+    ("engine.txt/x:X", r"is not a .py file"),
+])
+def test_bad_spec_is_a_usage_error(third_party, thesis, spec, message):
+    with pytest.raises(EngineSpecError, match=message) as err:
+        load_engine(spec, thesis)
+    assert "\n" not in str(err.value)
+
+
+def test_bad_options_are_usage_errors(third_party, thesis):
+    with pytest.raises(EngineSpecError, match=r"engine 'fake'.*does not take option\(s\) scal; it takes: scale"):
+        load_engine("fake", thesis, scal=2)
+    with pytest.raises(EngineSpecError, match="engine 'reference'.*takes no options; got build"):
+        load_engine("reference", thesis, build="tree")
+    with pytest.raises(EngineSpecError, match="engine 'exudyn'.*unknown Exudyn build 'x'"):
+        load_engine("exudyn", thesis, build="x")
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("lazy", r"engine 'lazy' \(fake_engine_mod:Lazy from fake-engines 1.2.3\) declares "
+             r"constraint_jacobian but does not implement it"),
+    ("boom", r"engine 'boom' \(fake_engine_mod:Boom .*\) raised while being built: RuntimeError: no licence server"),
+    ("ghost", r"engine 'ghost'.*no module 'no_such_module_xyz'.*registered by fake-engines 1.2.3"),
+    ("typo", r"declares unknown capabilities masmatrix"),
+])
+def test_engine_failure_is_a_load_error(third_party, thesis, spec, message):
+    with pytest.raises(EngineLoadError, match=message) as err:
+        load_engine(spec, thesis)
+    assert "\n" not in str(err.value)
+
+
+def test_unsupported_contact_and_import_failure(third_party, disc, tmp_path):
+    with pytest.raises(EngineLoadError, match=r"engine 'fake'.*supports the front-contact models "
+                                              r"thesis, not 'disc' of model 'thesis-disc'"):
+        load_engine("fake", disc)
+    broken = tmp_path / "broken_engine.py"
+    broken.write_text("import numpy\nraise ImportError('needs libfoo.so')\n")
+    with pytest.raises(EngineLoadError, match=r"engine 'broken_engine' .* failed to import: "
+                                              r"ImportError: needs libfoo.so"):
+        load_engine(f"{broken}:X", disc)
+    missing_dep = tmp_path / "dep_engine.py"
+    missing_dep.write_text("import no_such_dependency_xyz\n")
+    # the file exists, its dependency does not: the engine failed, the spec is right
+    with pytest.raises(EngineLoadError, match="No module named 'no_such_dependency_xyz'"):
+        load_engine(f"{missing_dep}:X", disc)
+
+
+def test_a_name_registered_twice_is_ambiguous(third_party, thesis, tmp_path_factory):
+    other = tmp_path_factory.mktemp("other")
+    _dist_info(other, "other-engines", "0.1", {"fake": "fake_engine_mod:Lazy"})
+    import sys
+    sys.path.insert(0, str(other))
+    try:
+        with pytest.raises(EngineSpecError, match=r"'fake' is registered more than once.*"
+                                                  r"fake-engines 1.2.3.*other-engines 0.1"):
+            load_engine("fake", thesis)
+    finally:
+        sys.path.remove(str(other))
+
+
+def test_load_engines_drops_failures_and_continues(third_party, thesis):
+    built, dropped = load_engines(["reference", "boom", "fake", "lazy", "ghost"], thesis,
+                                  {"fake": {"scale": 3.0}})
+    assert list(built) == ["reference", "fake"] and built["fake"].scale == 3.0
+    assert [name for name, _ in dropped] == ["boom", "lazy", "ghost"]
+    assert "no licence server" in dropped[0][1] and "constraint_jacobian" in dropped[1][1]
+    # a usage error stops everything before anything is built
+    with pytest.raises(EngineSpecError, match="unknown engine 'bulet'"):
+        load_engines(["reference", "bulet"], thesis)
+    with pytest.raises(EngineSpecError, match="does not take option"):
+        load_engines(["boom", "fake"], thesis, {"fake": {"bad": 1}})
+    with pytest.raises(EngineSpecError, match="options given for engine.*pinocchio"):
+        load_engines(["fake"], thesis, {"pinocchio": {}})
+
+
+def test_every_error_is_an_engine_error():
+    """The CLI catches EngineSpecError (exit 2) before EngineError (exit 1)."""
+    assert issubclass(EngineSpecError, EngineError) and issubclass(EngineLoadError, EngineError)
+    assert not issubclass(EngineSpecError, EngineLoadError)
+
+
+def test_installed_entry_points_win_over_the_source_tree(tmp_path, monkeypatch):
+    """Once bicycle-xval's own distribution registers the group, the pyproject fallback is
+    not read: here an installed 'bicycle-xval 9.9' registering only the reference."""
+    _dist_info(tmp_path, "bicycle-xval", "9.9", {"reference": "engines.reference:ReferenceEngine"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert available_engines() == ("reference",)
+    [info] = engine_info("reference")
+    assert info.source == "bicycle-xval 9.9"
