@@ -218,3 +218,18 @@ def test_installed_entry_points_win_over_the_source_tree(tmp_path, monkeypatch):
     assert available_engines() == ("reference",)
     [info] = engine_info("reference")
     assert info.source == "bicycle-xval 9.9"
+
+
+def test_the_contract_documents_the_code_s_order():
+    """docs/engines.md's coordinate and constraint tables follow the code's order, and every
+    capability of the base class is documented."""
+    import re
+
+    from reference_model import CONSTRAINT_NAMES, COORDINATES
+    text = (Path(__file__).resolve().parents[1] / "docs" / "engines.md").read_text()
+    coords = re.findall(r"^\| (\d) \| `(\w+)` +\| (?:m|rad) ", text, flags=re.M)
+    assert [name for _, name in coords] == list(COORDINATES)
+    rows = re.findall(r"^\| (\d) \| `(\w+)` \| (?:holonomic|velocity)", text, flags=re.M)
+    assert [name for _, name in rows] == list(CONSTRAINT_NAMES)
+    for cap in engines.CAPABILITIES:
+        assert f"| `{cap}` |" in text, cap
