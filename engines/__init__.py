@@ -16,7 +16,7 @@ from __future__ import annotations
 from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError, EngineLoadError,
                    EngineSpecError)
 from .registry import (GROUP, EngineInfo, LoadedEngines, available_engines, engine_info,
-                       load_engine, load_engines)
+                       load_engine, load_engines, parse_engine_options)
 
 # The built-in engines' names (a constant kept for existing imports; what is installed and
 # registered right now, third parties' included, is `available_engines()`).
@@ -24,4 +24,5 @@ ENGINES = ("reference", "pinocchio", "exudyn")
 
 __all__ = ["CAPABILITIES", "CONTACTS", "ENGINES", "GROUP", "CapabilityError", "Engine",
            "EngineError", "EngineInfo", "EngineLoadError", "EngineSpecError", "LoadedEngines",
-           "available_engines", "engine_info", "load_engine", "load_engines"]
+           "available_engines", "engine_info", "load_engine", "load_engines",
+           "parse_engine_options"]

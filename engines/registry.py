@@ -376,6 +376,68 @@ def load_engines(specs: Sequence[str], model, options: Mapping[str, Mapping[str,
     return out
 
 
+_TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
+
+
+def _convert(text: str, default: Any, what: str) -> Any:
+    """``text`` as the type of the option's default (bool, int, float, str); without a usable
+    default: an int, a float, true/false, none, else the string."""
+    low = text.strip().lower()
+    try:
+        if isinstance(default, bool):
+            if low in _TRUE or low in _FALSE:
+                return low in _TRUE
+            raise ValueError
+        if isinstance(default, int):
+            return int(text)
+        if isinstance(default, float):
+            return float(text)
+        if isinstance(default, str):
+            return text
+    except ValueError:
+        kind = type(default).__name__
+        raise EngineSpecError(f"{what}: {text!r} is not a {kind} (the default is {default!r})") from None
+    for conv in (int, float):
+        try:
+            return conv(text)
+        except ValueError:
+            pass
+    if low in ("true", "false"):
+        return low == "true"
+    return None if low in ("none", "null") else text
+
+
+def parse_engine_options(spec: str, pairs: Sequence[str]) -> dict[str, Any]:
+    """Options for engine ``spec`` from ``key=value`` strings (the CLI's ``--engine-option``),
+    each converted to the type of that option's default in the engine's ``__init__``
+    (``step=5e-4`` -> 0.0005, ``build=tree`` -> 'tree', a bool from true/false/yes/no/1/0).
+
+    Raises `EngineSpecError` for a pair without '=', an empty or repeated key, an option the
+    engine does not take, or a value of the wrong type; `EngineLoadError` if the engine itself
+    cannot be imported."""
+    cls, label, where = resolve(spec)
+    desc = spec.strip() if ":" in spec else where
+    try:
+        params = dict(list(inspect.signature(cls.__init__).parameters.items())[2:])
+    except (TypeError, ValueError):  # pragma: no cover
+        params = {}
+    names, anything = _option_names(cls)
+    out: dict[str, Any] = {}
+    for pair in pairs:
+        key, eq, value = pair.partition("=")
+        key = key.strip()
+        if not eq or not key:
+            raise EngineSpecError(f"engine option {pair!r} for {_who(label, desc)} is not key=value "
+                                  f"(e.g. step=5e-4)")
+        if key in out:
+            raise EngineSpecError(f"engine option {key!r} for {_who(label, desc)} is given twice")
+        _check_options(cls, label, desc, {key: None})
+        param = params.get(key)
+        default = param.default if param is not None and param.default is not param.empty else None
+        out[key] = _convert(value, default, f"option {key} of {_who(label, desc)}")
+    return out
+
+
 # -- listing ---------------------------------------------------------------------------------
 
 def _info(cls: type[Engine], name: str, spec: str, source: str) -> EngineInfo:

@@ -233,3 +233,21 @@ def test_the_contract_documents_the_code_s_order():
     assert [name for _, name in rows] == list(CONSTRAINT_NAMES)
     for cap in engines.CAPABILITIES:
         assert f"| `{cap}` |" in text, cap
+
+
+def test_engine_options_from_key_value_strings(third_party):
+    from engines import parse_engine_options
+    assert parse_engine_options("exudyn", ["build=redundant", "step=5e-4"]) == \
+        {"build": "redundant", "step": 5e-4}
+    assert parse_engine_options("fake", ["scale=2"]) == {"scale": 2.0}
+    assert isinstance(parse_engine_options("fake", ["scale=2"])["scale"], float)  # default 1.0
+    for pairs, message in ((["step"], r"'step' for engine 'exudyn' .* is not key=value"),
+                           (["=1"], "is not key=value"),
+                           (["step=1e-3", "step=2e-3"], "'step' .* given twice"),
+                           (["stepp=1e-3"], r"does not take option\(s\) stepp; it takes: build, step"),
+                           (["step=fast"], r"option step of engine 'exudyn' .*'fast' is not a float "
+                                           r"\(the default is 0.001\)")):
+        with pytest.raises(EngineSpecError, match=message):
+            parse_engine_options("exudyn", pairs)
+    with pytest.raises(EngineSpecError, match="takes no options; got build"):
+        parse_engine_options("reference", ["build=tree"])
