@@ -59,7 +59,7 @@ class Registration:
     @property
     def source(self) -> str:
         if self.distribution is None:
-            return f"{DISTRIBUTION} (source tree, not installed)"
+            return f"{DISTRIBUTION} (its pyproject.toml; entry points not installed)"
         return f"{self.distribution} {self.version}"
 
 
@@ -100,7 +100,10 @@ def _pyproject_registrations(path: Path = _PYPROJECT) -> list[Registration]:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, tomllib.TOMLDecodeError):
         return []
-    group = data.get("project", {}).get("entry-points", {}).get(GROUP, {})
+    project = data.get("project", {})
+    if _canonical(project.get("name")) != _canonical(DISTRIBUTION):   # someone else's file
+        return []
+    group = project.get("entry-points", {}).get(GROUP, {})
     return [Registration(str(n), str(t), None, None) for n, t in group.items()]
 
 

@@ -251,3 +251,11 @@ def test_engine_options_from_key_value_strings(third_party):
             parse_engine_options("exudyn", pairs)
     with pytest.raises(EngineSpecError, match="takes no options; got build"):
         parse_engine_options("reference", ["build=tree"])
+
+
+def test_fallback_reads_only_this_project_s_pyproject(tmp_path):
+    other = tmp_path / "pyproject.toml"
+    other.write_text('[project]\nname = "someone-else"\n'
+                     '[project.entry-points."bicycle_xval.engines"]\nx = "a.b:C"\n')
+    assert _pyproject_registrations(other) == []
+    assert _pyproject_registrations(tmp_path / "missing.toml") == []
