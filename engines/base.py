@@ -15,6 +15,9 @@ Sign conventions are the thesis's (see `reference_model.model`):
 * ``constraint_bias(q, dq)``              dD dq (5,)
 * ``forward_acceleration(q, dq, torques)`` exact constrained ddq (8,)
 * ``simulate(scenario, **options)``       a `reference_model.solvers.Trajectory`
+
+Each takes one state (8,) or a batch (N, 8). The full contract for engine authors (coordinates,
+signs, units, shapes, the rolling contact, statuses, registration, errors) is docs/engines.md.
 """
 
 from __future__ import annotations
