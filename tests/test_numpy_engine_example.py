@@ -22,7 +22,7 @@ from engines.registry import GROUP
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "numpy_engine"
 FILE_SPEC = f"{EXAMPLE / 'numpy_bicycle' / 'engine.py'}:NumpyEngine"
 ALL = {"mass_matrix", "inverse_dynamics", "gravity", "generalized_forces", "constraint_jacobian",
-       "constraint_bias", "forward_acceleration"}
+       "constraint_bias", "forward_acceleration"}      # the terms; it also simulates
 # what each planted bug changes: the gyroscopic torques live in Qv only (so in the inverse
 # dynamics, the forces and the accelerations); the frame's product of inertia also in M
 TOUCHES = {"gyroscopic": {"inverse_dynamics", "generalized_forces", "forward_acceleration"},
@@ -58,13 +58,13 @@ def test_loads_by_file_spec(thesis):
     eng = load_engine(FILE_SPEC, thesis)
     assert eng.name == "numpy-bicycle" and eng.bug is None
     [info] = engine_info(FILE_SPEC)
-    assert info.name == "numpy-bicycle" and set(info.capabilities) == ALL
+    assert info.name == "numpy-bicycle" and set(info.capabilities) == ALL | {"simulate"}
     assert info.options == ("bug",)
 
 
 def test_loads_through_its_entry_point(installed, disc):
     assert {"numpy-bicycle", "numpy-bicycle-buggy"} <= set(available_engines())
-    info = {i.name: i for i in engine_info()}
+    info = {i.name: i for i in engine_info("numpy-bicycle")}
     assert info["numpy-bicycle"].source == f"bicycle-numpy-engine {installed['version']}"
     assert info["numpy-bicycle"].contacts == ("thesis", "disc")
     assert load_engine("numpy-bicycle", disc).bug is None
@@ -99,3 +99,42 @@ def test_batches_match_single_states(thesis, states):
     np.testing.assert_array_equal(eng.generalized_forces(q, dq, T)[1],
                                   eng.generalized_forces(q[1], dq[1], T[1]))
     np.testing.assert_array_equal(eng.constraint_bias(q, dq)[2], eng.constraint_bias(q[2], dq[2]))
+
+
+def test_simulate_follows_the_contract_and_the_reference(thesis):
+    """stability-psid0 (no forward speed) falls over: with a fall limit of 0.4 rad both engines
+    report 'fell' at the same time, the final row is the fall itself, and the states agree.
+    Same integrator class and tolerances (DOP853, rtol 1e-10), terms equal to ~1e-14: the runs
+    differ by round-off (measured 3e-15 rad); 1e-6 is the harness's trajectory tolerance
+    (comparisons tolerances.toml), and 1e-9 s on the fall time is the same bound divided by
+    the lean rate at the fall (~1 rad/s)."""
+    from reference_model.scenarios import SCENARIOS
+    sc = SCENARIOS["stability-psid0"]
+    ours = load_engine(FILE_SPEC, thesis).simulate(sc, fall_limit=0.4)
+    ref = load_engine("reference", thesis).simulate(sc, fall_limit=0.4)
+    assert (ours.status, ref.status) == ("fell", "fell"), (ours.message, ref.message)
+    assert abs(ours.t_end - ref.t_end) < 1e-9 and ours.t[-1] == ours.t_end
+    assert abs(abs(ours.q[-1, 3]) - 0.4) < 1e-9
+    n = len(ours.t)
+    assert len(ref.t) == n and ours.q.shape == (n, 8) and ours.C.shape == (n, 5)
+    assert np.abs(ours.q - ref.q).max() < 1e-6 and np.abs(ours.dq - ref.dq).max() < 1e-6
+    for a in (ours.q, ours.dq, ours.ddq, ours.C, ours.T):
+        assert np.all(np.isfinite(a))
+
+
+def test_simulate_reports_a_failure_with_the_partial_trajectory(thesis):
+    """The linear solve breaks down beyond a lean of 0.2 rad (a planted singularity): status
+    'failed', the samples before it, no NaN."""
+    from reference_model.scenarios import SCENARIOS
+    eng = load_engine(FILE_SPEC, thesis)
+    real = eng._accelerations
+
+    def failing(q, dq, T, *rest):
+        if abs(q[3]) > 0.2:
+            raise np.linalg.LinAlgError("Singular matrix")
+        return real(q, dq, T, *rest)
+    eng._accelerations = failing
+    tr = eng.simulate(SCENARIOS["stability-psid0"], fall_limit=0.4)
+    assert tr.status == "failed" and "Singular matrix" in tr.message, tr.message
+    assert 0.0 < tr.t_end < 0.5 and len(tr.t) > 2 and np.abs(tr.q[:, 3]).max() <= 0.2
+    assert all(np.all(np.isfinite(a)) for a in (tr.q, tr.dq, tr.ddq, tr.C))

@@ -17,7 +17,9 @@ Newton-Euler on joint axes, no symbolic algebra and no numerical differentiation
   + w x I w), the gravity, drag and rider-torque forces from the same Jacobians;
 * the constraint rows [rD_z, vC_x, vC_y, vD_x, vD_y] straight from their definitions, D from
   their linearity in dq (column k = the rows at dq = e_k), dD dq by differentiating them once
-  more in time at ddq = 0.
+  more in time at ddq = 0;
+* ``simulate``: the scenario's initial state and torques from the harness, Baumgarte
+  stabilization, DOP853 (scipy) with dense output on the grid, the statuses of the contract.
 
 Options: ``bug`` plants a derivation error, for showing that the harness localizes it:
 ``"gyroscopic"`` drops the gyroscopic torques w x I w from Qv, ``"I3xz-sign"`` flips the sign
@@ -31,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from engines.base import Engine, EngineSpecError
+from engines.base import Engine, EngineError, EngineSpecError
 
 N_Q, N_C = 8, 5
 XC, YC, PHI, THETA, PSI, BETA, GAMMA, EPS = range(N_Q)
@@ -68,6 +70,7 @@ class _State:
     def __init__(self, e: "NumpyEngine", q, dq):
         p = e.p
         self.q, self.dq = q, dq
+        self._jac = {}
         Ryaw = rot_z(q[PHI])
         Alean = Ryaw @ rot_x(q[THETA])
         A = {2: Alean @ rot_y(q[PSI]), 3: Alean @ rot_y(q[BETA])}
@@ -105,7 +108,10 @@ class _State:
 
     # -- a material point P of body b -------------------------------------------------------
     def jacobians(self, b: int, P):
-        """(Jv (3x8) of b's material point at P, Jw (3x8) of b)."""
+        """(Jv (3x8) of b's material point at P, Jw (3x8) of b); cached per state."""
+        key = (b, P.tobytes())
+        if key in self._jac:
+            return self._jac[key]
         Jv, Jw = np.zeros((3, N_Q)), np.zeros((3, N_Q))
         for k in CHAIN[b]:
             if k in (XC, YC):
@@ -113,6 +119,7 @@ class _State:
             else:
                 Jv[:, k] = cross(self.axis[k], P - self.origin[k])
                 Jw[:, k] = self.axis[k]
+        self._jac[key] = Jv, Jw
         return Jv, Jw
 
     def velocity(self, b: int, P):
@@ -133,11 +140,12 @@ class _State:
 
 
 class NumpyEngine(Engine):
-    """The bicycle by Newton-Euler on joint axes in plain numpy (all but simulate)."""
+    """The bicycle by Newton-Euler on joint axes in plain numpy."""
 
     name = "numpy-bicycle"
     capabilities = frozenset({"mass_matrix", "inverse_dynamics", "gravity", "generalized_forces",
-                              "constraint_jacobian", "constraint_bias", "forward_acceleration"})
+                              "constraint_jacobian", "constraint_bias", "forward_acceleration",
+                              "simulate"})
     contacts = ("thesis", "disc")
 
     def __init__(self, model, bug: str | None = None):
@@ -170,8 +178,8 @@ class NumpyEngine(Engine):
     def _global_inertia(self, s: _State, b: int):
         return s.A[b] @ self.inertia[b] @ s.A[b].T
 
-    def _M(self, q):
-        s = _State(self, q, np.zeros(N_Q))
+    def _M(self, q, s: _State | None = None):
+        s = s or _State(self, q, np.zeros(N_Q))
         M = np.zeros((N_Q, N_Q))
         for b in (2, 3, 4, 5):
             Jv, Jw = s.jacobians(b, s.com[b])
@@ -223,7 +231,7 @@ class NumpyEngine(Engine):
     def inverse_dynamics(self, q, dq, ddq):
         def one(q, dq, ddq):
             s = _State(self, q, dq)
-            return self._M(q) @ ddq - self._Qv(s) - self._Qgrav(s)
+            return self._M(q, s) @ ddq - self._Qv(s) - self._Qgrav(s)
         return self._each(one, q, dq, ddq)
 
     # -- rolling contact --------------------------------------------------------------------
@@ -270,9 +278,10 @@ class NumpyEngine(Engine):
         du = (dn - u * dm) / m
         return (ddn - 2.0 * du * dm - u * ddm) / m
 
-    def _D(self, q):
-        """Rows [d rD_z/dt, vC_x, vC_y, vD_x, vD_y] are linear in dq: D from the Jacobians."""
-        s = _State(self, q, np.zeros(N_Q))
+    def _D(self, q, s: _State | None = None):
+        """Rows [d rD_z/dt, vC_x, vC_y, vD_x, vD_y] are linear in dq: D from the Jacobians
+        (which do not depend on dq: any state at q will do)."""
+        s = s or _State(self, q, np.zeros(N_Q))
         R = self.p.R_front
         rD = s.rG5 - R * self._front_direction(s)
         JvG5, _ = s.jacobians(5, s.rG5)
@@ -302,15 +311,94 @@ class NumpyEngine(Engine):
     def constraint_bias(self, q, dq):
         return self._each(lambda q, dq: self._bias(_State(self, q, dq)), q, dq)
 
+    def _accelerations(self, q, dq, T, a1=0.0, a2=0.0):
+        """ddq from [M D^T; D 0] [ddq; lambda] = [F; -dD dq - 2 a1 D dq - a2^2 C] (Baumgarte
+        with a1 = a2 = 0 is the exact constrained motion); and the residuals C."""
+        s = _State(self, q, dq)
+        F = self._Qv(s) + self._Qgrav(s) + self._applied(s, T)
+        D, bias = self._D(q, s), self._bias(s)
+        Ddq = D @ dq
+        C = np.concatenate([[(s.rG5 - self.p.R_front * self._front_direction(s))[2]], Ddq[1:]])
+        K = np.zeros((N_Q + N_C, N_Q + N_C))
+        K[:N_Q, :N_Q], K[:N_Q, N_Q:], K[N_Q:, :N_Q] = self._M(q, s), D.T, D
+        ddq = np.linalg.solve(K, np.concatenate([F, -bias - 2.0 * a1 * Ddq - a2 * a2 * C]))[:N_Q]
+        if not np.all(np.isfinite(ddq)):
+            raise FloatingPointError("non-finite accelerations")
+        return ddq, C
+
     def forward_acceleration(self, q, dq, torques=(0.0, 0.0, 0.0)):
-        def one(q, dq, T):
-            s = _State(self, q, dq)
-            F = self._Qv(s) + self._Qgrav(s) + self._applied(s, T)
-            D, bias = self._D(q), self._bias(s)
-            K = np.zeros((N_Q + N_C, N_Q + N_C))
-            K[:N_Q, :N_Q], K[:N_Q, N_Q:], K[N_Q:, :N_Q] = self._M(q), D.T, D
-            return np.linalg.solve(K, np.concatenate([F, -bias]))[:N_Q]
-        return self._each(one, q, dq, torques)
+        return self._each(lambda q, dq, T: self._accelerations(q, dq, T)[0], q, dq, torques)
+
+    # -- a forward run ------------------------------------------------------------------------
+    def simulate(self, scenario, *, t_end=None, fall_limit=1.4, rtol=1e-10, atol=1e-12):
+        """A forward scenario with Baumgarte stabilization (the scenario's a1, a2), DOP853 with
+        dense output on the scenario's grid; stops at |theta| = fall_limit ('fell') or when the
+        integrator or the linear solve fails ('failed', with the trajectory so far)."""
+        from scipy.integrate import DOP853
+        from scipy.optimize import brentq
+
+        from reference_model.scenarios import initial_state, torque_input
+        from reference_model.solvers import Trajectory
+
+        if scenario.kind != "forward":
+            raise EngineError(f"{scenario.name!r} is not a forward scenario")
+        if scenario.constraints != "baumgarte":
+            raise EngineError(f"this engine integrates with Baumgarte stabilization only; scenario "
+                              f"{scenario.name!r} asks for {scenario.constraints!r}")
+        a1, a2 = (float(a) for a in scenario.baumgarte)
+        init = initial_state(self.model, scenario)
+        given = torque_input(self.model, scenario)
+        torque = given if callable(given) else (lambda t, T=np.asarray(given, float): T)
+        grid = scenario.t if t_end is None else scenario.t[scenario.t <= t_end + 1e-12]
+
+        def rhs(t, y):
+            return np.concatenate([y[N_Q:], self._accelerations(y[:N_Q], y[N_Q:], torque(t), a1, a2)[0]])
+
+        y0 = np.concatenate([init.q, init.dq])
+        # Baumgarte's decay rate 2 a1 + a2^2 bounds the explicit step (stability region ~3/rate)
+        rate = 2 * a1 + a2 * a2
+        solver = DOP853(rhs, grid[0], y0, grid[-1], rtol=rtol, atol=atol,
+                        max_step=3.0 / rate if rate > 0 else np.inf)
+        ts, ys = [grid[0]], [y0]
+        status, message, i = "completed", "reached the end of the grid", 1
+        while status == "completed" and solver.status == "running":
+            try:
+                solver.step()
+            except (np.linalg.LinAlgError, FloatingPointError) as exc:
+                status, message = "failed", f"right-hand side failed after t = {solver.t:.6f} s: {exc}"
+                break
+            if solver.status == "failed":
+                status, message = "failed", f"integrator failed at t = {solver.t:.6f} s"
+                break
+            sol, t_stop = solver.dense_output(), solver.t
+            if abs(solver.y[THETA]) >= fall_limit:
+                sign = np.sign(solver.y[THETA])
+                t_stop = brentq(lambda t: sign * sol(t)[THETA] - fall_limit, solver.t_old, solver.t)
+                status, message = "fell", f"|theta| reached {fall_limit} rad at t = {t_stop:.6f} s"
+            while i < grid.size and grid[i] <= t_stop:
+                ts.append(grid[i])
+                ys.append(sol(grid[i]))
+                i += 1
+            if status == "fell" and ts[-1] < t_stop:
+                ts.append(t_stop)
+                ys.append(sol(t_stop))
+        t, Y = np.array(ts), np.array(ys)
+        T = np.array([torque(tk) for tk in t]).reshape(-1, 3)
+        out = []
+        for k, (y, Tk) in enumerate(zip(Y, T)):     # ddq and C at the samples; cut where they fail
+            try:
+                out.append(self._accelerations(y[:N_Q], y[N_Q:], Tk, a1, a2))
+            except (np.linalg.LinAlgError, FloatingPointError) as exc:
+                status, message = "failed", f"accelerations failed at t = {t[k]:.6f} s: {exc}"
+                t, Y, T = t[:k], Y[:k], T[:k]
+                break
+        return Trajectory(t=t, q=Y[:, :N_Q], dq=Y[:, N_Q:],
+                          ddq=np.array([o[0] for o in out]).reshape(-1, N_Q),
+                          C=np.array([o[1] for o in out]).reshape(-1, N_C), T=T, status=status,
+                          message=message, t_end=float(t[-1]) if t.size else float(grid[0]),
+                          settings={"integrator": "DOP853", "rtol": rtol, "atol": atol,
+                                    "constraints": "baumgarte", "baumgarte": [a1, a2],
+                                    "fall_limit": fall_limit})
 
 
 class BuggyNumpyEngine(NumpyEngine):
