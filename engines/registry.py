@@ -250,6 +250,9 @@ def resolve(spec: str) -> tuple[type[Engine], str, str]:
 
 def _resolve_name(name: str) -> tuple[type[Engine], str, str]:
     regs = [r for r in registrations() if r.name == name]
+    if not regs and (_is_file_spec(name) or (_MODULE.match(name) and "." in name)):
+        raise EngineSpecError(f"engine spec {name!r} names no class: write {name}:ClassName "
+                              f"(the Engine subclass to load, after a colon)")
     if not regs:
         names = ", ".join(available_engines()) or "none registered"
         raise EngineSpecError(f"unknown engine {name!r}; available: {names} (or give a spec "
