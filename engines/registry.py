@@ -250,9 +250,13 @@ def resolve(spec: str) -> tuple[type[Engine], str, str]:
 
 def _resolve_name(name: str) -> tuple[type[Engine], str, str]:
     regs = [r for r in registrations() if r.name == name]
-    if not regs and (_is_file_spec(name) or (_MODULE.match(name) and "." in name)):
+    if not regs and _is_file_spec(name):
         raise EngineSpecError(f"engine spec {name!r} names no class: write {name}:ClassName "
                               f"(the Engine subclass to load, after a colon)")
+    if not regs and _MODULE.match(name) and "." in name:
+        head, tail = name.rsplit(".", 1)
+        raise EngineSpecError(f"unknown engine {name!r}; a class in a module is written "
+                              f"package.module:Class, e.g. {head}:{tail}")
     if not regs:
         names = ", ".join(available_engines()) or "none registered"
         raise EngineSpecError(f"unknown engine {name!r}; available: {names} (or give a spec "

@@ -125,7 +125,7 @@ def test_module_and_file_specs(third_party, thesis):
     ("bullet", r"unknown engine 'bullet'; available: reference, pinocchio, exudyn.*spec"),
     ("fake_engine_mod:", r"malformed.*package.module:Class"),
     ("my/engine.py", r"'my/engine.py' names no class: write my/engine.py:ClassName"),
-    ("fake_engine_mod.FakeEngine", r"names no class: write fake_engine_mod.FakeEngine:ClassName"),
+    ("fake_engine_mod.FakeEngine", r"package.module:Class, e.g. fake_engine_mod:FakeEngine"),
     ("fake_engine_mod:1x", r"malformed"),
     ("fake engine:Fake", r"malformed: 'fake engine' is neither a dotted module"),
     ("no_such_module_xyz:Ghost", r"no module 'no_such_module_xyz'.*install"),
