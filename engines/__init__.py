@@ -7,16 +7,17 @@
     eng = load_engine("path/to/my_engine.py:MyEngine", model)  # or one in a file
 
 Engines are registered in the entry-point group ``bicycle_xval.engines`` (the built-ins in
-this project's pyproject.toml, like any third party's); `engines.registry` finds and builds
-them. The contract an engine fulfils is docs/engines.md.
+this project's pyproject.toml, like any third party's); `engines.registry` finds them,
+`engines.loading` builds them. The contract an engine fulfils is docs/engines.md.
 """
 
 from __future__ import annotations
 
 from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError, EngineLoadError,
                    EngineSpecError)
-from .registry import (GROUP, EngineInfo, LoadedEngines, available_engines, engine_info,
-                       load_engine, load_engines, parse_engine_options)
+from .loading import (EngineInfo, LoadedEngines, engine_info, load_engine, load_engines,
+                      parse_engine_options)
+from .registry import GROUP, available_engines
 
 # The built-in engines' names (a constant kept for existing imports; what is installed and
 # registered right now, third parties' included, is `available_engines()`).
