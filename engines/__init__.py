@@ -16,7 +16,7 @@ from __future__ import annotations
 from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError, EngineLoadError,
                    EngineSpecError)
 from .loading import (EngineInfo, LoadedEngines, engine_info, load_engine, load_engines,
-                      parse_engine_options)
+                      parse_engine_options, split_options)
 from .registry import GROUP, available_engines
 
 # The built-in engines' names (a constant kept for existing imports; what is installed and
@@ -26,4 +26,4 @@ ENGINES = ("reference", "pinocchio", "exudyn")
 __all__ = ["CAPABILITIES", "CONTACTS", "ENGINES", "GROUP", "CapabilityError", "Engine",
            "EngineError", "EngineInfo", "EngineLoadError", "EngineSpecError", "LoadedEngines",
            "available_engines", "engine_info", "load_engine", "load_engines",
-           "parse_engine_options"]
+           "parse_engine_options", "split_options"]

@@ -248,3 +248,18 @@ def engine_info(spec: str | None = None) -> list[EngineInfo]:
             continue
         out.append(_info(cls, reg.name, reg.target, reg.source))
     return out
+
+
+def split_options(method, options: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(the options ``method`` takes by keyword, the rest): e.g. for calling an engine's
+    ``simulate`` with only the CLI settings it understands and telling the user which ones did
+    not apply (never drop them silently). A method with ``**kwargs`` takes everything."""
+    try:
+        params = inspect.signature(method).parameters.values()
+    except (TypeError, ValueError):  # pragma: no cover - builtins without signatures
+        return dict(options), {}
+    if any(p.kind is p.VAR_KEYWORD for p in params):
+        return dict(options), {}
+    names = {p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    taken = {k: v for k, v in options.items() if k in names}
+    return taken, {k: v for k, v in options.items() if k not in names}

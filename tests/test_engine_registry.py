@@ -261,3 +261,16 @@ def test_fallback_reads_only_this_project_s_pyproject(tmp_path):
                      '[project.entry-points."bicycle_xval.engines"]\nx = "a.b:C"\n')
     assert _pyproject_registrations(other) == []
     assert _pyproject_registrations(tmp_path / "missing.toml") == []
+
+
+def test_split_options_by_a_method_s_signature():
+    from engines import split_options
+
+    def simulate(scenario, *, t_end=None, fall_limit=1.4):
+        pass
+
+    def anything(scenario, **kw):
+        pass
+    assert split_options(simulate, {"fall_limit": 0.4, "rtol": 1e-9}) == ({"fall_limit": 0.4},
+                                                                         {"rtol": 1e-9})
+    assert split_options(anything, {"rtol": 1e-9}) == ({"rtol": 1e-9}, {})
