@@ -14,8 +14,8 @@ capability's method, does not support the model's contact, or raised while being
 from __future__ import annotations
 
 import inspect
-from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Mapping, NamedTuple, Sequence
 
 from .base import CAPABILITIES, Engine, EngineError, EngineLoadError, EngineSpecError
 from .registry import _one_line, _resolve_target, _who, registrations, resolve
@@ -39,15 +39,12 @@ class EngineInfo:
     error: str | None = None
 
 
-@dataclass
-class LoadedEngines:
-    """`load_engines`' result: the built engines by label, and the dropped ones with reasons."""
+class LoadedEngines(NamedTuple):
+    """`load_engines`' result: the built engines by label, and the dropped ones with reasons
+    (``engines, dropped = load_engines(...)``)."""
 
-    engines: dict[str, Engine] = field(default_factory=dict)
-    dropped: list[tuple[str, str]] = field(default_factory=list)
-
-    def __iter__(self):   # engines, dropped = load_engines(...)
-        return iter((self.engines, self.dropped))
+    engines: dict[str, Engine]
+    dropped: list[tuple[str, str]]
 
 
 # -- building --------------------------------------------------------------------------------
@@ -131,7 +128,7 @@ def load_engines(specs: Sequence[str], model, options: Mapping[str, Mapping[str,
         raise EngineSpecError(f"options given for engine(s) {', '.join(extra)} that are not in the "
                               f"list {', '.join(specs)}")
     resolved: list[tuple[str, type[Engine] | None, str, str | None]] = []
-    out = LoadedEngines()
+    out = LoadedEngines({}, [])
     for spec in specs:     # first every name/spec and option, so a usage error stops the run early
         try:
             cls, label, _ = resolve(spec)
