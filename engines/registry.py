@@ -95,7 +95,10 @@ def registrations() -> list[Registration]:
     regs = list(unique.values())
     mine = [r for r in regs if r.distribution is None
             or _canonical(r.distribution) == _canonical(DISTRIBUTION)]
-    # ours in their declaration order, then third parties' by name
+    # ours in their pyproject order (installers write entry points sorted by name), then
+    # third parties' by name
+    declared = [r.name for r in _pyproject_registrations()]
+    mine.sort(key=lambda r: (declared.index(r.name) if r.name in declared else len(declared), r.name))
     return mine + sorted((r for r in regs if r not in mine), key=lambda r: (r.name, r.target))
 
 

@@ -213,13 +213,27 @@ def test_every_error_is_an_engine_error():
 
 
 def test_installed_entry_points_win_over_the_source_tree(tmp_path, monkeypatch):
-    """Once bicycle-xval's own distribution registers the group, the pyproject fallback is
-    not read: here an installed 'bicycle-xval 9.9' registering only the reference."""
-    _dist_info(tmp_path, "bicycle-xval", "9.9", {"reference": "engines.reference:ReferenceEngine"})
+    """Once bicycle-xval's own distribution registers the group, the pyproject fallback is not
+    read: every registration then comes from a distribution. Here an installed 'bicycle-xval
+    9.9' registers an extra name (true whether or not the real install has entry points)."""
+    _dist_info(tmp_path, "bicycle-xval", "9.9", {"ref-alias": "engines.reference:ReferenceEngine"})
     monkeypatch.syspath_prepend(str(tmp_path))
-    assert available_engines() == ("reference",)
-    [info] = engine_info("reference")
-    assert info.source == "bicycle-xval 9.9"
+    from engines.registry import registrations
+    regs = registrations()
+    assert all(r.distribution is not None for r in regs)
+    assert {r.name: r.source for r in regs}["ref-alias"] == "bicycle-xval 9.9"
+    [info] = engine_info("ref-alias")
+    assert info.source == "bicycle-xval 9.9" and info.error is None
+
+
+def test_builtins_keep_their_declared_order_when_installed(tmp_path, monkeypatch):
+    """Installers write entry_points.txt sorted by name (setuptools does); the listing keeps
+    the pyproject's order all the same (the reference first)."""
+    _dist_info(tmp_path, "bicycle-xval", "0.1.0", {
+        "exudyn": "engines.exudyn:ExudynEngine", "pinocchio": "engines.pinocchio:PinocchioEngine",
+        "reference": "engines.reference:ReferenceEngine"})
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert available_engines() == BUILTINS
 
 
 def test_the_contract_documents_the_code_s_order():
