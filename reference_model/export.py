@@ -22,6 +22,7 @@ them. Gravity is along -z with magnitude ``g`` (URDF has no field for it; the JS
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import tempfile
@@ -30,7 +31,7 @@ from typing import Any
 from xml.sax.saxutils import quoteattr
 
 from .derivation import BODY_NAMES, COORDINATES, TORQUE_NAMES
-from .params import Parameters, resolve_model
+from .params import PARAMETER_NAMES, Parameters, resolve_model
 
 FORMATS = ("urdf", "json")
 SCHEMA = "bicycle-xval/model-export/1"
@@ -129,8 +130,24 @@ def model_description(p: Parameters) -> dict[str, Any]:
                 TORQUE_NAMES[2]: "anti-roll torque on the frame about its x axis (single-sided)",
             },
         },
-        "parameters": {k: v for k, v in p.as_dict().items()},
+        "parameters": {n: float(getattr(p, n)) for n in PARAMETER_NAMES},
+        "provenance": {k: _plain(v) for k, v in p.as_dict().items() if k not in PARAMETER_NAMES},
     }
+
+
+def _plain(value: Any) -> Any:
+    """JSON-ready: numbers, strings and None as they are, dataclasses (e.g. a benchmark's Table
+    1) as dicts, numpy scalars as floats, anything else by its text."""
+    if value is None or isinstance(value, (str, bool, int, float)):
+        return value
+    if dataclasses.is_dataclass(value):
+        return {k: _plain(v) for k, v in dataclasses.asdict(value).items()}
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return str(value)
 
 
 def _num(x: float) -> str:

@@ -14,6 +14,7 @@ import pytest
 
 from reference_model import COORDINATES, CONSTRAINT_NAMES, ParameterError, load_model
 from reference_model.export import export_model, model_description
+from reference_model.params import PARAMETER_NAMES
 
 pin = pytest.importorskip("pinocchio")
 
@@ -103,7 +104,8 @@ def test_json_describes_tree_contact_and_parameters(tmp_path, name):
     assert [j["name"] for j in desc["joints"]] == list(COORDINATES)
     assert desc["rolling_contact"]["model"] == model.contact
     assert [c["name"] for c in desc["rolling_contact"]["constraints"]] == list(CONSTRAINT_NAMES)
-    assert desc["parameters"] == model.params.as_dict()
+    assert desc["parameters"] == {n: getattr(model.params, n) for n in PARAMETER_NAMES}
+    assert desc["provenance"]["name"] == model.params.name
     assert desc["wheels"]["front"]["radius"] == model.params.R_front
     pm = _pin_from_json(desc)
     q = _states(20)
