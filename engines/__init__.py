@@ -1,32 +1,29 @@
-"""Engine adapters behind one small interface (`engines.base.Engine`).
+"""Engine adapters behind one small interface (`engines.base.Engine`), found as plugins.
 
     from engines import load_engine
     eng = load_engine("pinocchio", model)     # model from reference_model.load_model
     eng = load_engine("exudyn", model, build="redundant", step=1e-3)
+    eng = load_engine("mypkg.engine:MyEngine", model)          # any importable Engine subclass
+    eng = load_engine("path/to/my_engine.py:MyEngine", model)  # or one in a file
+
+Engines are registered in the entry-point group ``bicycle_xval.engines`` (the built-ins in
+this project's pyproject.toml, like any third party's); `engines.registry` finds them,
+`engines.loading` builds them. The contract an engine fulfils is docs/engines.md.
 """
 
 from __future__ import annotations
 
-from .base import CAPABILITIES, CapabilityError, Engine, EngineError
+from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError, EngineLoadError,
+                   EngineSpecError)
+from .loading import (EngineInfo, LoadedEngines, engine_info, load_engine, load_engines,
+                      parse_engine_options, split_options)
+from .registry import GROUP, available_engines
 
+# The built-in engines' names (a constant kept for existing imports; what is installed and
+# registered right now, third parties' included, is `available_engines()`).
 ENGINES = ("reference", "pinocchio", "exudyn")
 
-
-def load_engine(name: str, model, **options) -> Engine:
-    """Build engine ``name`` for a `reference_model.Model`; ``options`` go to the engine
-    (Exudyn: build, step, solver, ...); the reference and Pinocchio engines take none."""
-    if options and name in ("reference", "pinocchio"):
-        raise EngineError(f"engine {name!r} takes no options; got {', '.join(sorted(options))}")
-    if name == "reference":
-        from .reference import ReferenceEngine
-        return ReferenceEngine(model)
-    if name == "pinocchio":
-        from .pinocchio import PinocchioEngine
-        return PinocchioEngine(model)
-    if name == "exudyn":
-        from .exudyn import ExudynEngine
-        return ExudynEngine(model, **options)
-    raise EngineError(f"unknown engine {name!r}; available: {', '.join(ENGINES)}")
-
-
-__all__ = ["CAPABILITIES", "ENGINES", "CapabilityError", "Engine", "EngineError", "load_engine"]
+__all__ = ["CAPABILITIES", "CONTACTS", "ENGINES", "GROUP", "CapabilityError", "Engine",
+           "EngineError", "EngineInfo", "EngineLoadError", "EngineSpecError", "LoadedEngines",
+           "available_engines", "engine_info", "load_engine", "load_engines",
+           "parse_engine_options", "split_options"]

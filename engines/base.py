@@ -15,6 +15,9 @@ Sign conventions are the thesis's (see `reference_model.model`):
 * ``constraint_bias(q, dq)``              dD dq (5,)
 * ``forward_acceleration(q, dq, torques)`` exact constrained ddq (8,)
 * ``simulate(scenario, **options)``       a `reference_model.solvers.Trajectory`
+
+Each takes one state (8,) or a batch (N, 8). The full contract for engine authors (coordinates,
+signs, units, shapes, the rolling contact, statuses, registration, errors) is docs/engines.md.
 """
 
 from __future__ import annotations
@@ -27,6 +30,9 @@ CAPABILITIES = (
 )
 
 
+CONTACTS = ("thesis", "disc")   # the front-contact models a `reference_model.Model` can carry
+
+
 class CapabilityError(NotImplementedError):
     """An engine was asked for something it does not provide."""
 
@@ -35,11 +41,29 @@ class EngineError(RuntimeError):
     """An engine could not be built or run (missing package, unsupported model...)."""
 
 
+class EngineSpecError(EngineError):
+    """The user named or configured an engine wrongly: an unknown name, a malformed spec, no
+    such module, file or class, a class that is not an `Engine`, an option the engine does not
+    take or a bad option value. A usage error (the CLI exits 2); the message says the fix.
+    Engines raise it from ``__init__`` for a bad option value."""
+
+
+class EngineLoadError(EngineError):
+    """A correctly named engine failed: its module does not import, it lacks the method of a
+    capability it declares, it does not support the model's contact, or it raised while being
+    built. The CLI exits 1; a run drops the engine and reports why (`engines.load_engines`)."""
+
+
 class Engine:
-    """Base class: subclasses set ``name`` and ``capabilities`` and implement those methods."""
+    """Base class: subclasses set ``name``, ``capabilities`` (and ``contacts`` if they support
+    fewer than both front-contact models) and implement those methods. Keyword arguments of
+    ``__init__`` after the model are the engine's options (``load_engine(spec, model, **options)``).
+    An instance may narrow ``capabilities`` per its options (Exudyn's redundant build has no M);
+    the class attribute is what `engines.engine_info` lists (the default options')."""
 
     name: str = "engine"
     capabilities: frozenset[str] = frozenset()
+    contacts: tuple[str, ...] = CONTACTS
 
     def __init__(self, model: Model):
         self.model = model

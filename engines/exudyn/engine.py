@@ -65,7 +65,7 @@ from reference_model import Model
 from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import DEFAULT_FALL_LIMIT, THETA, Trajectory
 
-from ..base import Engine, EngineError
+from ..base import Engine, EngineError, EngineSpecError
 
 try:
     import exudyn as exu
@@ -259,17 +259,19 @@ class ExudynEngine(Engine):
     ``newton_tolerance``: Newton's relative and absolute tolerance."""
 
     name = "exudyn"
+    # with the default build='tree'; build='redundant' narrows them to {'simulate'}
+    capabilities = frozenset({"mass_matrix", "generalized_forces", "simulate"})
 
     def __init__(self, model: Model, build: str = "tree", step: float = 1e-3,
                  solver: str = "generalizedAlpha", spectral_radius: float = 0.9,
                  newton_tolerance: float = 1e-10):
         super().__init__(model)
         if build not in BUILDS:
-            raise EngineError(f"unknown Exudyn build {build!r}; choose one of: {', '.join(BUILDS)}")
+            raise EngineSpecError(f"unknown Exudyn build {build!r}; choose one of: {', '.join(BUILDS)}")
         if solver not in SOLVERS:
-            raise EngineError(f"unknown Exudyn solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
+            raise EngineSpecError(f"unknown Exudyn solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
         if not (isinstance(step, (int, float)) and np.isfinite(step) and step > 0):
-            raise EngineError(f"step must be a positive time step in s; got {step!r}")
+            raise EngineSpecError(f"step must be a positive time step in s; got {step!r}")
         if build == "redundant" and model.contact != "disc":
             raise EngineError(
                 f"the redundant Exudyn build realises only the rolling-disc contact (true lowest "
