@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ..judgments.diagnose import COMPARED_ENGINES, DEFAULT_STATES, diagnose
+from ..judgments.diagnose import DEFAULT_STATES, diagnose
 from ..report.files import write_text
 from .errors import EXIT_FAIL, EXIT_OK, UsageError
 
@@ -15,16 +15,23 @@ MAX_STATES = 2000
 
 
 def add_diagnose_parser(subparsers) -> None:
-    """Add ``diagnose FILE [--against MODEL] [--engines ...] [--states N] [--json OUT]``."""
+    """Add ``diagnose [FILE] [--model NAME|FILE] [--engine SPEC ...] [--engines a,b]
+    [--engine-option k=v] [--against NAME|FILE] [--states N] [--json OUT]``."""
     s = subparsers.add_parser(
-        "diagnose", help="check a parameter file's reference model against the engines and "
-                         "localize any difference (term, entries, parameter, body)")
-    s.add_argument("file", help="parameter .toml file (or a named model) of the model under test")
+        "diagnose", help="compare engines term by term with the reference built from the same "
+                         "parameters and localize any difference (term, entries, parameter, body)")
+    s.add_argument("file", nargs="?", default=None,
+                   help="parameter file (or named model) of the model under test [--model]")
+    s.add_argument("--model", default=None, help="the same as FILE: a named model or a file")
+    s.add_argument("--engine", dest="engine_specs", action="append", default=[], metavar="SPEC",
+                   help="an engine to check: a name, package.module:Class or path/file.py:Class "
+                        "(repeatable)")
+    s.add_argument("--engines", default=None,
+                   help="comma-separated engine names, the same as --engine [pinocchio]")
+    from .engines import add_engine_option_argument
+    add_engine_option_argument(s)
     s.add_argument("--against", default=None,
                    help="build the engines from this named model or file instead [the same file]")
-    s.add_argument("--engines", default="pinocchio",
-                   help=f"comma-separated engines to compare with: {','.join(COMPARED_ENGINES)} "
-                        "[pinocchio]")
     s.add_argument("--states", type=int, default=DEFAULT_STATES,
                    help=f"number of deterministic random states [{DEFAULT_STATES}]")
     s.add_argument("--json", type=Path, default=None, help="also write the diagnosis as JSON")
@@ -33,19 +40,31 @@ def add_diagnose_parser(subparsers) -> None:
 
 def run_diagnose(args) -> int:
     """The ``diagnose`` command: prints the table, 0 when everything agrees, 1 otherwise.
-    Bad options raise `comparisons.cli.UsageError`; bad files `ParameterError`."""
-    names = tuple(e.strip() for e in str(args.engines).split(",") if e.strip())
-    bad = [e for e in names if e not in COMPARED_ENGINES]
-    if not names or bad:
-        what = f"unknown engine {bad[0]!r}" if bad else "no engine given"
-        raise UsageError(f"--engines: {what}; use a comma-separated subset of "
-                         f"{','.join(COMPARED_ENGINES)} (the reference is the model under test)")
+    Bad options raise `UsageError`; bad files `ParameterError`; bad specs `EngineSpecError`."""
+    if args.file is not None and args.model is not None:
+        raise UsageError("give the model once: FILE or --model, not both")
+    model = args.file or args.model
+    if model is None:
+        raise UsageError("diagnose needs the model under test: a parameter file or a named "
+                         "model, e.g. 'bicycle-xval diagnose --model thesis --engine my.py:Mine'")
+    names = list(args.engine_specs)
+    if args.engines is not None:
+        names += [e.strip() for e in str(args.engines).split(",") if e.strip()]
+        if not names:
+            raise UsageError("--engines: no engine given; name at least one, e.g. pinocchio")
+    names = tuple(dict.fromkeys(names or ["pinocchio"]))
+    if "reference" in names:
+        raise UsageError("--engines: 'reference' is the model under test; name the engines to "
+                         "compare with it, e.g. pinocchio")
     if not 4 <= args.states <= MAX_STATES:
         raise UsageError(f"--states must be an integer from 4 to {MAX_STATES} (the least-squares "
                          f"fit's matrix grows with it); got {args.states}")
     if args.json is not None and args.json.is_dir():
         raise UsageError(f"--json {args.json} is a folder; give a file name, e.g. diagnosis.json")
-    result = diagnose(args.file, args.against, names, args.states)
+    from .engines import engine_options
+    options = {n: engine_options(n, args.engine_options) for n in names} \
+        if args.engine_options else None
+    result = diagnose(model, args.against, names, args.states, options=options)
     print(result.describe())
     if args.json is not None:
         write_text(args.json, json.dumps(result.to_dict(), indent=1) + "\n")

@@ -84,25 +84,32 @@ def cmd_simulate(args) -> int:
     if not 0 < args.fall_limit <= np.pi:
         raise UsageError(f"--fall-limit must be an angle in (0, pi] rad; got {args.fall_limit}")
     if args.engine != "exudyn" and (args.build is not None or args.step is not None):
-        raise UsageError("--build and --step apply to --engine exudyn only")
+        raise UsageError("--build and --step apply to --engine exudyn only (other engines: "
+                         "--engine-option key=value)")
     if args.step is not None and not 0 < args.step <= 0.1:
         raise UsageError(f"--step must be in (0, 0.1] s; got {args.step}")
     sc = _scenario(args.scenario, "forward")
     model = _load(args.model, args.contact)
-    from engines import load_engine
-    if args.engine == "exudyn":
-        options = {k: v for k, v in (("build", args.build), ("step", args.step)) if v is not None}
-        engine = load_engine("exudyn", model, **options)
-        traj = engine.simulate(sc, fall_limit=args.fall_limit)
-    else:
-        engine = load_engine(args.engine, model)
-        traj = engine.simulate(sc, constraints=args.constraints, rtol=args.rtol, atol=args.atol,
-                               fall_limit=args.fall_limit)
+    from engines import load_engine, split_options
+
+    from .engines import engine_options
+    options = engine_options(args.engine, args.engine_options)
+    options.update({k: v for k, v in (("build", args.build), ("step", args.step)) if v is not None})
+    engine = load_engine(args.engine, model, **options)
+    settings = {"fall_limit": args.fall_limit}
+    if args.engine != "exudyn":   # the reference's integrator settings, where the engine takes them
+        settings.update(constraints=args.constraints, rtol=args.rtol, atol=args.atol)
+    taken, ignored = split_options(engine.simulate, settings)
+    ignored = {k: v for k, v in ignored.items() if v is not None}
+    traj = engine.simulate(sc, **taken)
     write_csv(frames.simulation_frame(traj), args.out)
     how = ", ".join(f"{k}: {v}" for k, v in traj.settings.items()
                     if k in ("constraints", "build", "step", "solver") and v is not None)
     print(f"{sc.name} on {args.engine} / {model.name} ({model.contact} contact, {how}): "
           f"{traj.status}: {traj.message}")
+    if ignored:
+        print(f"  not applied (the engine's simulate does not take them): "
+              f"{', '.join(f'{k} = {v}' for k, v in ignored.items())}")
     if "initial_correction" in traj.settings:
         print(f"  initial state: {traj.settings['initial_correction']}")
     print(f"  {len(traj.t)} samples to t = {traj.t_end:.4f} s -> {args.out}; "
@@ -145,7 +152,8 @@ def cmd_run(args) -> int:
         opts = select(args.scenarios, args.quick, args.engines)
     except SelectionError as exc:
         raise UsageError(str(exc)) from None
-    opts = dataclasses.replace(opts, workers=args.jobs)
+    opts = dataclasses.replace(opts, workers=args.jobs,
+                               engine_options=_run_engine_options(opts.engines, args.engine_options))
     before = os.environ.get(TOLERANCES_ENV)
     try:
         if args.tolerances is not None:   # worker processes inherit it
@@ -165,12 +173,35 @@ def cmd_run(args) -> int:
     return EXIT_OK if passed else EXIT_FAIL
 
 
+def _run_engine_options(engines, pairs) -> tuple:
+    """``--engine-option key=value`` of ``run``: each pair goes to every selected engine (other
+    than the reference) that takes that option; a pair no selected engine takes is an error."""
+    if not pairs:
+        return ()
+    from engines import EngineSpecError, parse_engine_options
+    out, used = {}, set()
+    for spec in engines:
+        if spec == "reference":
+            continue
+        for pair in pairs:
+            try:
+                value = parse_engine_options(spec, [pair])
+            except EngineSpecError:
+                continue
+            out.setdefault(spec, {}).update(value)
+            used.add(pair)
+    unused = [p for p in pairs if p not in used]
+    if unused:
+        raise UsageError(f"--engine-option {unused[0]}: no selected engine takes it; see "
+                         "'bicycle-xval engines' for each engine's options")
+    return tuple((spec, tuple(sorted(o.items()))) for spec, o in out.items())
+
+
 def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from engines import ENGINES
     from reference_model.solvers import CONSTRAINT_HANDLING, DEFAULT_FALL_LIMIT
 
     p = _Parser(prog="bicycle-xval", description="Cross-validation harness for the thesis bicycle.")
@@ -200,8 +231,11 @@ def build_parser() -> argparse.ArgumentParser:
     model_opts(s)
     s.add_argument("--scenario", required=True, help="a forward scenario (replay, stability-psid*)")
     s.add_argument("--out", required=True, type=Path, help="CSV file to write")
-    s.add_argument("--engine", choices=ENGINES, default="reference",
-                   help="engine to run the scenario on [reference]")
+    s.add_argument("--engine", default="reference",
+                   help="engine to run the scenario on: a name (see 'bicycle-xval engines'), "
+                        "package.module:Class or path/file.py:Class [reference]")
+    from .engines import add_engine_option_argument
+    add_engine_option_argument(s)
     s.add_argument("--build", choices=("redundant", "tree"), default=None,
                    help="Exudyn only: redundant bodies + joints, or the kinematic tree [engine default]")
     s.add_argument("--step", type=float, default=None, help="Exudyn only: time step, s [engine default]")
@@ -217,7 +251,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", type=Path, default=Path("reports/latest"), help="output folder [reports/latest]")
     s.add_argument("--scenarios", default=None, help="comma-separated subset of scenarios")
     s.add_argument("--engines", default=None,
-                   help="comma-separated engines to compare with the reference [all: reference,pinocchio,exudyn]")
+                   help="comma-separated engines to compare with the reference: names (see "
+                        "'bicycle-xval engines') or specs package.module:Class, path/file.py:Class "
+                        "[reference,pinocchio,exudyn]")
+    from .engines import add_engine_option_argument as _add_opt
+    _add_opt(s)
     s.add_argument("--quick", action="store_true", help="a fast subset")
     s.add_argument("--jobs", type=int, default=None,
                    help="worker processes [the machine's cores, never more than the stages]")
@@ -227,6 +265,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     from .diagnose import add_diagnose_parser
     from .eigenvalues import add_eigenvalues_parser
+    from .compare_trajectory import add_compare_trajectory_parser
+    from .engines import add_engines_parser
+    add_engines_parser(sub)
+    add_compare_trajectory_parser(sub)
     add_diagnose_parser(sub)
     add_eigenvalues_parser(sub)
     return p
@@ -254,14 +296,14 @@ def _join_signed_values(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     from reference_model import ModelEvaluationError, ParameterError
     from reference_model.scenarios import UnknownScenarioError
-    from engines import EngineError
+    from engines import EngineError, EngineSpecError
     from reference_model.solvers import ConstraintSolveError
 
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         args = build_parser().parse_args(_join_signed_values(argv))
         return args.func(args)
-    except (UsageError, ParameterError, UnknownScenarioError) as exc:
+    except (UsageError, ParameterError, UnknownScenarioError, EngineSpecError) as exc:
         print(f"bicycle-xval: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except (ModelEvaluationError, ConstraintSolveError, EngineError) as exc:

@@ -481,11 +481,18 @@ class Diagnosis:
         if loc.explanation is not None:
             lines.append(f"localized: {loc.describe()}")
             lines.append(f"  {loc.explanation.describe()}")
+        if self.against is None:
+            lines.append(f"compared: engines built from {self.model} against the reference built "
+                         f"from {self.model}" + (": the file is interpreted consistently" if
+                                                 self.agrees else "")
+                         + "; to see how it differs from another bicycle use --against NAME")
         if self.declared:
-            shown = [f"{n} {a} -> {b}" if isinstance(a, str) else
-                     f"{n} {a:.6g} -> {b:.6g} {PARAMETER_UNITS[n]}" for n, a, b in self.declared]
+            theirs = Path(str(self.against)).stem
+            shown = [f"{n}: {theirs} {b}, yours {a}" if isinstance(a, str) else
+                     f"{n}: {theirs} {b:.6g}, yours {a:.6g} {PARAMETER_UNITS[n]}"
+                     for n, a, b in self.declared]
             more = f" and {len(shown) - 6} more (see --json)" if len(shown) > 6 else ""
-            lines.append("the two parameter sets differ in: " + ", ".join(shown[:6]) + more)
+            lines.append(f"your file differs from {self.against} in: " + "; ".join(shown[:6]) + more)
         lines.append(f"verdict: {'everything agrees' if self.agrees else 'DIFFERS'}")
         return "\n".join(lines)
 
@@ -515,7 +522,7 @@ def _declared(a: Model, b: Model) -> tuple[tuple[str, float | str, float | str],
 
 def diagnose(params_file: str | Path, against: str | Path | None = None,
              engines: Sequence[str] = ("pinocchio",), n_states: int = DEFAULT_STATES,
-             seed: int = DEFAULT_SEED) -> Diagnosis:
+             seed: int = DEFAULT_SEED, options: Mapping[str, Mapping] | None = None) -> Diagnosis:
     """The reference model of ``params_file`` (a .toml file or a named model) against the
     engines built from the same file (``against=None``: adapters and engines must agree) or
     from ``against`` (a named model or a file): which terms differ, at which entries, and the
@@ -523,15 +530,14 @@ def diagnose(params_file: str | Path, against: str | Path | None = None,
     difference. A bad file raises `ParameterError`; an unknown engine or too few states
     ValueError."""
     engines = tuple(engines)
-    unknown = [e for e in engines if e not in COMPARED_ENGINES]
-    if not engines or unknown:
-        raise ValueError(f"engines must be a non-empty subset of {', '.join(COMPARED_ENGINES)}; "
-                         f"got {', '.join(unknown) or 'none'}")
+    if not engines or "reference" in engines:
+        raise ValueError("engines must name at least one engine other than the reference (the "
+                         f"reference is the model under test); got {', '.join(engines) or 'none'}")
     if isinstance(n_states, bool) or not isinstance(n_states, int) or n_states < 4:
         raise ValueError(f"n_states must be an integer >= 4; got {n_states!r}")
     model = Model(resolve_model(params_file))
     truth = model if against is None else Model(resolve_model(against))
-    built = [load_engine(e, truth) for e in engines]
+    built = [load_engine(e, truth, **dict((options or {}).get(e, {}))) for e in engines]
     states = random_states(n_states, seed=seed)
     return Diagnosis(str(params_file), None if against is None else str(against), engines,
                      n_states, localize(model, states, built), _declared(model, truth))

@@ -97,22 +97,35 @@ def compare_mass_matrix(scenario: str, model, states_q: np.ndarray, engines: dic
     return out
 
 
-def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols) -> tuple[list[dict], TrajectoryError]:
-    """Trajectory (8 coordinates, up to the horizon) of ``other`` against the reference."""
+#: how each kind of engine's trajectory is judged: with the reference's own integrator and
+#: tolerances ([trajectory]); with its own integrator, directly ([trajectory_conformance]); or
+#: reported here and judged by a convergence study (None)
+SAME_SOLVER_ENGINES = ("pinocchio",)
+
+
+def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols,
+                    judged_by: str | None = "auto") -> tuple[list[dict], TrajectoryError]:
+    """Trajectory (8 coordinates, up to the horizon) of ``other`` against the reference.
+    ``judged_by``: the tolerance entry that judges it, None to report it only, "auto" for the
+    built-ins (Pinocchio runs the reference's solver: [trajectory]; Exudyn is judged by its
+    convergence order)."""
     te = trajectory_error(ref, other, horizon.t)
-    same_solver = other.engine == "pinocchio"
-    tol = tols["trajectory"]
+    if judged_by == "auto":
+        judged_by = "trajectory" if other.engine in SAME_SOLVER_ENGINES else None
+    same_solver = judged_by == "trajectory"
+    tol = tols[judged_by] if judged_by else None
     comp = {
         "quantity": "trajectory", "scenario": ref.scenario, "model": ref.model,
         "engines": [ref.engine, other.engine], "max_error": te.worst,
-        "tolerance": tol.tolerance if same_solver else None,
-        "passed": bool(te.worst <= tol.tolerance) if same_solver else None,
+        "tolerance": tol.tolerance if tol else None,
+        "passed": bool(te.worst <= tol.tolerance) if tol else None,
         "localized_to": (f"first past {HORIZON_THRESHOLD:g}: {te.first}" if te.first != "-" else
                          f"none past {HORIZON_THRESHOLD:g}") + f"; largest: {te.worst_coordinate}",
         "horizon": horizon.t, "horizon_reason": horizon.reason,
         "note": ("same integrator and formulation as the reference: judged" if same_solver else
+                 f"its own integrator: judged by [{judged_by}]" if tol else
                  "a fixed-step integrator: reported here, judged by its convergence order"),
-        "why": "" if same_solver else "fixed-step integrator, judged by its convergence order",
+        "why": "" if tol else "fixed-step integrator, judged by its convergence order",
     }
     return [comp], te
 

@@ -45,11 +45,19 @@ def _verdict(summary: dict) -> list[str]:
     verdicts: dict[str, int] = {}
     for c in summary["claims"]:
         verdicts[c["verdict"]] = verdicts.get(c["verdict"], 0) + 1
-    head = ("All judged comparisons are within tolerance." if summary["passed"] else
-            f"Something is out of tolerance: {n_fail} comparison(s) failed.")
+    dropped = summary.get("dropped_engines", [])
+    if summary["passed"]:
+        head = "All judged comparisons are within tolerance."
+    elif n_fail:
+        head = f"Something is out of tolerance: {n_fail} comparison(s) failed."
+    elif dropped:
+        head = f"{len(dropped)} engine(s) could not be run (below); the rest agree."
+    else:
+        head = "Something failed (below)."
     unobservable = sum(f["verdict"] == "not observable" for f in faults)
     return [
         f"**{head}**", "",
+        *[f"- **Dropped**: engine `{d['engine']}`: {d['reason']}" for d in dropped],
         f"- Engines: {', '.join(summary['engines'])}"
         f"{' (quick subset of scenarios and states)' if summary.get('quick') else ''}.",
         f"- {len(comps)} comparisons, {n_judged} judged against a tolerance, {n_fail} failed; "

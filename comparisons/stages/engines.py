@@ -76,6 +76,30 @@ def pinocchio_terms(n_states: int) -> Section:
     return sec
 
 
+def plugin_terms(spec: str, options: dict, n_states: int) -> Section:
+    """An engine from outside (a plugin or spec) term by term, on both contact models where it
+    supports them: the quantities it declares."""
+    from .runs import label_of
+    label = label_of(spec)
+    sec = Section(f"Reference vs {label}, term by term")
+    sec.text(f"`{spec}`{' with ' + str(options) if options else ''} at {n_states} deterministic "
+             "states (large lean, steer near ±π/2, rates up to 20 rad/s), the quantities it "
+             "declares; errors relative to the scale each tolerance names.")
+    states = random_states(n_states, seed=7)
+    rows = []
+    for name in ("thesis", "thesis-disc"):
+        model = load_model(name)
+        try:
+            eng = load_engine(spec, model, **options)
+        except Exception as exc:   # noqa: BLE001 - a model the engine does not support
+            rows.append((name, "-", "-", "-", "not run", f"{type(exc).__name__}: {exc}"))
+            continue
+        rows += _term_rows(sec, compare_terms(load_engine("reference", model), eng, states), name,
+                           ["reference", label], f"random-states-{n_states}", (name,))
+    sec.table(("model", "quantity", "max error", "tolerance", "verdict", "worst entry"), rows)
+    return sec
+
+
 def exudyn_terms(n_states: int) -> Section:
     """The terms Exudyn's kinematic tree provides (M, and Qv + Qgrav + Qaero + S T)."""
     sec = Section("Reference vs Exudyn kinematic tree, term by term")

@@ -42,7 +42,7 @@ def fault_section(entries: list[dict]) -> Section:
     return sec
 
 
-def localization_lines(comparisons) -> list[tuple[str, str]]:
+def localization_lines(comparisons, setups: dict) -> list[tuple[str, str]]:
     """For every (model, engine) whose terms or inverse dynamics failed a tolerance: a heading
     and the localization (`diagnose.localize`): which terms, which entries, and the parameter
     or structural cause (with its body) that best explains the difference. Empty when
@@ -50,15 +50,14 @@ def localization_lines(comparisons) -> list[tuple[str, str]]:
     from reference_model import load_model
     from ..judgments.diagnose import localize
     from ..judgments.terms import random_states
-    from .runs import SETUPS
     pairs = sorted({(c.get("model", "thesis"), c["engines"][1]) for c in comparisons
                     if c["passed"] is False and c["quantity"] in TERM_QUANTITIES
                     and len(c["engines"]) == 2})
     out = []
     for model_name, engine in pairs:
-        if engine not in SETUPS:
+        if engine not in setups:
             continue
         model = load_model(model_name)
-        loc = localize(model, random_states(16, seed=11), [SETUPS[engine].build(model)])
+        loc = localize(model, random_states(16, seed=11), [setups[engine].build(model)])
         out.append((f"{model_name}: reference vs {engine}", loc.describe()))
     return out

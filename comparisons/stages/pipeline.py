@@ -17,6 +17,7 @@ the localization of anything that failed, the summary table. `run_comparison` re
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import platform
 import sys
@@ -46,9 +47,13 @@ class Options:
     """What `bicycle-xval run` was asked to do."""
 
     scenarios: tuple[str, ...]
-    engines: tuple[str, ...]          # engine names, reference first
+    engines: tuple[str, ...]          # engine names or specs, reference first
     quick: bool = False
     workers: int | None = None
+    engine_options: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()   # spec -> options
+
+    def options_for(self) -> dict:
+        return {spec: dict(opts) for spec, opts in self.engine_options}
 
 
 @dataclass
@@ -79,10 +84,18 @@ def select(scenarios: str | None, quick: bool, engines: str | None) -> Options:
                                  f"{', '.join(SCENARIOS)}")
     chosen = list(ENGINE_NAMES) if engines is None else [e.strip() for e in engines.split(",")
                                                          if e.strip()]
+    from engines import EngineSpecError, available_engines
+    from engines.registry import resolve
     for e in chosen:
-        if e not in ENGINE_NAMES:
+        if ":" in e:
+            try:
+                resolve(e)
+            except EngineSpecError as exc:
+                raise SelectionError(f"--engines: {exc}") from None
+        elif e not in available_engines():
             raise SelectionError(f"unknown engine {e!r} in --engines; choose from "
-                                 f"{', '.join(ENGINE_NAMES)}")
+                                 f"{', '.join(available_engines())} or give a spec "
+                                 "package.module:Class or path/file.py:Class")
     if "reference" not in chosen:
         chosen.insert(0, "reference")   # everything is compared against it
     return Options(tuple(names), tuple(dict.fromkeys(chosen)), quick)
@@ -131,8 +144,9 @@ def environment(setups) -> dict:
 def _tasks(opts: Options, labels: list[str]) -> list[Task]:
     from reference_model.scenarios import get_scenario
     from . import benchmark, engines, faults, scenarios
-    from .runs import cost, run_one
-    tasks = [Task(("run", lab, n), run_one, (lab, n), cost(lab, n), f"{n} on {lab}")
+    from .runs import cost, run_one, setups_for
+    setups = {s.label: s for s in setups_for(opts.engines, opts.options_for())}
+    tasks = [Task(("run", lab, n), run_one, (setups[lab], n), cost(lab, n), f"{n} on {lab}")
              for n in opts.scenarios for lab in labels]
     for n in opts.scenarios:
         sc = get_scenario(n)
@@ -157,6 +171,11 @@ def _tasks(opts: Options, labels: list[str]) -> list[Task]:
         tasks.append(Task("energy", engines.energy_section, (), 2.0, "energy drift"))
         tasks.append(Task(("faults", "exudyn"), faults.fault_entries, ("exudyn",), 3.0,
                           "fault injection on Exudyn's tree"))
+    for spec in opts.engines:
+        if spec not in ENGINE_NAMES:   # a plugin: its terms, where it declares them
+            tasks.append(Task(("plugin-terms", spec), engines.plugin_terms,
+                              (spec, opts.options_for().get(spec, {}), 50 if quick else 200), 1.5,
+                              f"{spec} term by term"))
     if "pinocchio" in opts.engines and "exudyn" in opts.engines:
         builds = benchmark.QUICK_BUILDS if quick else benchmark.BUILDS
         tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (quick,), 1.5,
@@ -168,6 +187,25 @@ def _tasks(opts: Options, labels: list[str]) -> list[Task]:
             tasks.append(Task("benchmark-convergence", benchmark.benchmark_convergence, (), 6.0,
                               "benchmark: Exudyn convergence"))
     return tasks
+
+
+def _buildable(opts: Options):
+    """The setups of the selected engines and the engines that cannot be built (each tried on
+    the thesis model in this process): (setups, [(engine, reason)])."""
+    from engines import EngineError, load_engine
+    from reference_model import load_model
+    from .runs import setups_for
+    setups = setups_for(opts.engines, opts.options_for())
+    dropped = []
+    model = load_model("thesis")
+    for s in setups:
+        if s.engine in ENGINE_NAMES and not s.options:
+            continue
+        try:
+            load_engine(s.engine, model, **dict(s.options))
+        except (EngineError, Exception) as exc:   # noqa: BLE001 - any failure drops the engine
+            dropped.append((s.engine, f"{type(exc).__name__}: {' '.join(str(exc).split())}"))
+    return setups, dropped
 
 
 def _failed_stage(title: str, error: str) -> Section:
@@ -186,7 +224,13 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
     from .runs import setups_for
 
     t_start = time.perf_counter()
-    setups = setups_for(opts.engines)
+    setups, dropped = _buildable(opts)
+    if dropped:
+        opts = dataclasses.replace(opts, engines=tuple(e for e in opts.engines
+                                                       if e not in {d[0] for d in dropped}))
+        setups = [s for s in setups if s.engine not in {d[0] for d in dropped}]
+        for name, reason in dropped:
+            progress(f"engine {name} dropped: {reason}")
     labels = [s.label for s in setups]
     tasks = _tasks(opts, labels)
     progress(f"{len(tasks)} stages on {opts.workers or 'all'} worker(s): "
@@ -210,7 +254,8 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                 if isinstance(key, tuple) and key[0] == "horizon" and r.error is None}
     rows, checks, corrections = scenarios.reference_rows(opts.scenarios, runs)
     from reference_model import load_model
-    sections = [scenarios.compare_scenarios(opts.scenarios, labels, runs, horizons)]
+    by_label = {s.label: s for s in setups}
+    sections = [scenarios.compare_scenarios(opts.scenarios, by_label, runs, horizons)]
     claims = judge_claims(runs, labels, load_model("thesis"), opts.scenarios)
 
     def add(key, title, build=lambda v: v):
@@ -219,6 +264,8 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
             sections.append(failed or build(v))
 
     add("pinocchio-terms", "Reference vs Pinocchio, term by term")
+    for spec in opts.engines:
+        add(("plugin-terms", spec), f"Reference vs {spec}, term by term")
     add("exudyn-terms", "Reference vs Exudyn kinematic tree, term by term")
     traj_keys = [k for k in done if isinstance(k, tuple) and k[0] == "exudyn-trajectory"]
     if traj_keys:
@@ -253,14 +300,16 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         sections.append(faults.fault_section(fault_rows))
 
     comparisons = [c for s in sections for c in s.comparisons]
-    localization = faults.localization_lines(comparisons)
+    localization = faults.localization_lines(comparisons, by_label)
     failed = (any(c["passed"] is False for c in checks)
               or any(r["status"] == "failed" for r in rows)
               or any(c["passed"] is False for c in comparisons)
-              or any(f["verdict"] not in ("localized", "not observable") for f in fault_rows))
+              or any(f["verdict"] not in ("localized", "not observable") for f in fault_rows)
+              or bool(dropped))
     summary = {
         "passed": not failed,
         "engines": list(opts.engines),
+        "dropped_engines": [{"engine": n, "reason": r} for n, r in dropped],
         "scenarios": rows,
         "engine_runs": [{"engine": r.engine, "scenario": r.scenario, "model": r.model,
                          "status": r.status, "t_end": round(r.t_end, 6), "message": r.message}

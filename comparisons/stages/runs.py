@@ -55,19 +55,46 @@ ENGINE_SETUPS = {"reference": ("reference",), "pinocchio": ("pinocchio",),
                  "exudyn": ("exudyn-tree",)}
 
 
-def setups_for(engines) -> list[EngineSetup]:
-    """The setups of the selected engine names, reference first."""
-    labels = [lab for e in engines for lab in ENGINE_SETUPS.get(e, ())]
-    return [SETUPS[lab] for lab in labels]
+def label_of(spec: str) -> str:
+    """The report's label of an engine spec: its name, or the class name of a
+    ``module:Class`` / ``file.py:Class`` spec."""
+    return spec.rsplit(":", 1)[-1] if ":" in spec else spec
 
 
-def run_one(label: str, scenario: str) -> Run:
-    """Run ``scenario`` on the setup ``label`` (a top-level function: worker processes call it)."""
+def plugin_setup(spec: str, options: dict | None = None) -> EngineSetup:
+    """The setup of an engine that is not a built-in: its declared capabilities say which
+    scenarios it runs (inverse through a ``run_inverse(scenario)`` method, forward through
+    ``simulate``)."""
+    from engines.registry import resolve
+    cls = resolve(spec)[0]
+    kinds = tuple(k for k, ok in (("inverse", callable(getattr(cls, "run_inverse", None))),
+                                  ("forward", "simulate" in getattr(cls, "capabilities", ())))
+                  if ok)
+    opts = tuple(sorted((options or {}).items()))
+    return EngineSetup(label_of(spec), spec, opts, kinds,
+                       settings=f"{spec} with its own defaults"
+                                + (f" and {', '.join(f'{k} = {v}' for k, v in opts)}" if opts else ""))
+
+
+def setups_for(engines, options: dict | None = None) -> list[EngineSetup]:
+    """The setups of the selected engines (names or specs), reference first; ``options``:
+    spec -> keyword options for engines that are not built-ins."""
+    out = []
+    for e in engines:
+        if e in ENGINE_SETUPS and not (options or {}).get(e):
+            out += [SETUPS[lab] for lab in ENGINE_SETUPS[e]]
+        else:
+            out.append(plugin_setup(e, (options or {}).get(e)))
+    return out
+
+
+def run_one(setup: EngineSetup, scenario: str) -> Run:
+    """Run ``scenario`` on ``setup`` (a top-level function: worker processes call it)."""
     from reference_model import load_model
     from reference_model.scenarios import get_scenario
 
     sc = get_scenario(scenario)
-    setup = SETUPS[label]
+    label = setup.label
     model = load_model(sc.model)
     if sc.kind not in setup.kinds:
         return run_scenario(label, None, model, sc, setup.kinds)

@@ -19,7 +19,6 @@ from ..judgments.scenario_compare import (compare_constraints, compare_forward, 
                                           compare_mass_matrix, constraint_series)
 from ..judgments.tolerances import load_tolerances
 from .results import Section, num, verdict_word
-from .runs import SETUPS
 
 CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative to Mped
 M_STATES = 100           # states along a run at which M is compared
@@ -59,9 +58,10 @@ def reference_rows(names, runs: dict) -> tuple[list[dict], list[dict], dict[str,
     return rows, checks, corrections
 
 
-def compare_scenarios(names, labels, runs: dict, horizons: dict) -> Section:
+def compare_scenarios(names, setups: dict, runs: dict, horizons: dict) -> Section:
     """What each scenario's registry entry says is compared, with the figures' data."""
     tols = load_tolerances()
+    labels = list(setups)
     sec = Section("Every engine on every scenario")
     sec.text("What each scenario's registry entry (`reference_model/scenarios.py`) lists as "
              f"compared: M at ~{M_STATES} of the reference's states, torques and multipliers "
@@ -85,7 +85,7 @@ def compare_scenarios(names, labels, runs: dict, horizons: dict) -> Section:
             engines = {}
             for lab in labels:
                 if lab != "reference" and (lab, model.name) not in built:
-                    built[(lab, model.name)] = SETUPS[lab].build(model)
+                    built[(lab, model.name)] = setups[lab].build(model)
                 if lab != "reference":
                     engines[lab] = built[(lab, model.name)]
             comps += compare_mass_matrix(name, model, ref.q[::step], engines, tols)
@@ -107,7 +107,8 @@ def compare_scenarios(names, labels, runs: dict, horizons: dict) -> Section:
                 lines[lab] = (r.t, C[:, 0], C[:, 1:].max(axis=1))
             if lab == "reference" or "trajectory" not in sc.compared or not r.t.size:
                 continue
-            c, te = compare_forward(model, ref, r, hor, tols)
+            judged = "auto" if setups[lab].engine in ("pinocchio", "exudyn") else "trajectory_conformance"
+            c, te = compare_forward(model, ref, r, hor, tols, judged_by=judged)
             comps += c
             errors[lab] = (te.t, te.errors.max(axis=1) if te.t.size else te.t)
         figures.figure(f"{name}_trajectories.png", "trajectory_overlay", scenario=name, runs=here,
