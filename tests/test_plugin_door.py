@@ -1,0 +1,110 @@
+"""An engine from outside the repository goes through every door of the harness unchanged:
+`run`, `simulate`, `diagnose`, the conformance plugin, by a bare ``file.py:Class`` spec and by
+an entry point of a package the project has never heard of. The engine is the third-party
+example (examples/numpy_engine, written from docs/engines.md); its planted bug (the sign of
+the frame's product of inertia) must be localized by `diagnose --engine` to its term and body.
+"""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from comparisons.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "numpy_engine"
+FILE_SPEC = f"{EXAMPLE / 'numpy_bicycle' / 'engine.py'}:NumpyEngine"
+
+
+def _pytest(*args, cwd):
+    """The conformance plugin in a fresh process, as an engine author runs it."""
+    env = dict(os.environ, PYTHONHASHSEED="0")
+    return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q",
+                           "--pyargs", "comparisons.conformance", *args],
+                          cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+
+
+def test_run_with_a_file_spec_compares_its_terms(tmp_path):
+    out = tmp_path / "r"
+    assert main(["run", "--quick", "--scenarios", "check", "--engines",
+                 f"reference,{FILE_SPEC}", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    mine = [c for c in summary["comparisons"] if c["engines"] == ["reference", "NumpyEngine"]]
+    assert {c["quantity"] for c in mine} >= {"mass_matrix", "constraint_bias", "forward_acceleration"}
+    assert all(c["passed"] for c in mine)
+    runs = {r["engine"]: r["status"] for r in summary["engine_runs"]}
+    assert runs["NumpyEngine"] == "not run"       # no run_inverse: recorded, not dropped
+
+
+def test_an_engine_that_cannot_be_built_is_dropped_and_named(tmp_path, capsys):
+    broken = tmp_path / "broken.py"
+    broken.write_text("from engines.base import Engine\n\nclass Broken(Engine):\n"
+                      "    capabilities = frozenset({'mass_matrix'})\n"
+                      "    def __init__(self, model):\n        raise RuntimeError('no bicycle today')\n")
+    out = tmp_path / "r"
+    assert main(["run", "--quick", "--scenarios", "check", "--engines",
+                 f"reference,{broken}:Broken", "--out", str(out)]) == 1
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["dropped_engines"][0]["reason"].endswith("no bicycle today")
+    assert "Dropped" in (out / "report.md").read_text()
+    capsys.readouterr()
+    assert main(["run", "--engines", f"{tmp_path / 'nope.py'}:X", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nope.py" in err[0]
+
+
+def test_simulate_with_a_file_spec(tmp_path, capsys):
+    out = tmp_path / "s.csv"
+    assert main(["simulate", "--engine", FILE_SPEC, "--scenario", "stability-psid0",
+                 "--fall-limit", "0.4", "--out", str(out)]) == 0
+    assert "fell" in capsys.readouterr().out and out.stat().st_size > 0
+
+
+def test_diagnose_localizes_the_planted_bug_to_its_term_and_body(capsys):
+    assert main(["diagnose", "--model", "thesis", "--engine", FILE_SPEC,
+                 "--engine-option", "bug=I3xz-sign"]) == 1
+    text = capsys.readouterr().out
+    assert "localized: M, Qv via I3xz (body 3 frame+rider)" in text
+    assert main(["diagnose", "--model", "thesis", "--engine", FILE_SPEC]) == 0
+
+
+def test_conformance_plugin_passes_the_correct_engine_and_fails_the_buggy_one(tmp_path):
+    sel = ["--model", "thesis-disc", "-k", "sweep"]
+    ok = _pytest("--engine", FILE_SPEC, *sel, cwd=tmp_path)
+    assert ok.returncode == 0, ok.stdout[-2000:]
+    assert "7 passed" in ok.stdout
+    # the buggy engine: the four terms the bug touches fail (listed as expected failures with
+    # their reason, they are 'xfailed': failed as expected), gravity, D and dD dq pass ...
+    xf = tmp_path / "xfails.txt"
+    xf.write_text("".join(f"test_term_sweep[NumpyEngine-thesis-disc-{q}]  # planted: I3xz sign\n"
+                          for q in ("mass_matrix", "inverse_dynamics", "generalized_forces",
+                                    "forward_acceleration")))
+    listed = _pytest("--engine", FILE_SPEC, "--engine-option", "bug=I3xz-sign", *sel,
+                     "--xfails-file", str(xf), cwd=tmp_path)
+    assert listed.returncode == 0, listed.stdout[-2000:]
+    assert "3 passed" in listed.stdout and "4 xfailed" in listed.stdout, listed.stdout[-2000:]
+    # ... and strict: a listed check that passes is reported
+    strict = _pytest("--engine", FILE_SPEC, *sel, "--xfails-file", str(xf), cwd=tmp_path)
+    assert strict.returncode == 1 and "XPASS(strict)" in strict.stdout
+
+
+def test_an_entry_point_of_an_unknown_package_is_found_and_run(tmp_path):
+    """A temporary installed distribution (a dist-info with an entry point) naming the example's
+    class: `engines` lists it and `simulate` runs it by name."""
+    dist = tmp_path / "acme_bike-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: acme-bike\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text(
+        "[bicycle_xval.engines]\nacme = numpy_bicycle.engine:NumpyEngine\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), str(EXAMPLE), str(ROOT)]))
+    cmd = [sys.executable, "-m", "comparisons.cli"]
+    listed = subprocess.run(cmd + ["engines"], env=env, capture_output=True, text=True, timeout=300)
+    assert listed.returncode == 0 and "acme  (acme-bike 1.0" in listed.stdout, listed.stdout
+    sim = subprocess.run(cmd + ["simulate", "--engine", "acme", "--scenario", "stability-psid0",
+                                "--fall-limit", "0.4", "--out", str(tmp_path / "a.csv")],
+                         env=env, capture_output=True, text=True, timeout=300)
+    assert sim.returncode == 0, sim.stderr
