@@ -25,7 +25,7 @@ import numpy as np
 
 from ..report import frames
 from ..report.files import write_csv
-from .errors import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, UsageError
+from .errors import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE, UsageError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -299,6 +299,12 @@ def main(argv: list[str] | None = None) -> int:
     from engines import EngineError, EngineSpecError
     from reference_model.solvers import ConstraintSolveError
 
+    import signal
+
+    from ..stages.pool import raise_terminated
+    previous = signal.getsignal(signal.SIGTERM)
+    if previous in (signal.SIG_DFL, None):   # SIGTERM unwinds like Ctrl-C: staging folders go
+        signal.signal(signal.SIGTERM, raise_terminated)
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         args = build_parser().parse_args(_join_signed_values(argv))
@@ -312,10 +318,14 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         print(f"bicycle-xval: error: {exc.strerror or exc}: {exc.filename or ''}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("bicycle-xval: interrupted; nothing written (an existing report is as it was)",
+    except KeyboardInterrupt as exc:
+        from ..stages.pool import Terminated
+        what = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        print(f"bicycle-xval: {what}; nothing written (an existing report is as it was)",
               file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
 
 
 if __name__ == "__main__":

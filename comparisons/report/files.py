@@ -39,6 +39,9 @@ def atomic_path(path: Path, suffix: str = ""):
         yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())     # mkstemp's 0600 is for the temporary only
         os.replace(tmp, path)
+    except OSError as exc:                   # e.g. a full disk: name the file being written
+        Path(tmp).unlink(missing_ok=True)
+        raise OSError(exc.errno, f"{exc.strerror or exc} while writing", str(path)) from exc
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

@@ -53,8 +53,14 @@ def _timed(func, args):
     return func(*args), time.perf_counter() - t0
 
 
-class Terminated(Exception):
-    """SIGTERM reached the main process while tasks were running."""
+class Terminated(KeyboardInterrupt):
+    """SIGTERM reached the main process: an interruption like Ctrl-C (never caught by an
+    ``except Exception``), so every ``finally`` and context manager on the way out runs."""
+
+
+def raise_terminated(signum, frame):
+    """A SIGTERM handler: turn the signal into `Terminated`."""
+    raise Terminated("terminated (SIGTERM)")
 
 
 def default_workers(n_tasks: int) -> int:
@@ -78,11 +84,7 @@ def run_tasks(tasks: list[Task], workers: int | None = None,
             progress(_line(k, n, task, results[task.key]))
         return results
     previous = signal.getsignal(signal.SIGTERM)
-
-    def _terminate(signum, frame):
-        raise Terminated("terminated (SIGTERM)")
-
-    signal.signal(signal.SIGTERM, _terminate)
+    signal.signal(signal.SIGTERM, raise_terminated)
     pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
     try:
         pending = {pool.submit(_timed, t.func, t.args): t for t in order}

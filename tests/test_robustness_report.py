@@ -1,0 +1,96 @@
+"""The report folder under damage, interruption and hostile environments (issue: nothing lost,
+nothing crashes, nothing silently wrong). Runs are the smallest that write a whole report
+(the reference on the check scenario), in subprocesses where a signal is sent.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from comparisons.cli import main
+from comparisons.report.files import MANIFEST, ReportFolder, write_text
+
+TINY = ["run", "--quick", "--scenarios", "check", "--engines", "reference"]
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _cli(*args, env=None, **kw):
+    return subprocess.Popen([sys.executable, "-m", "comparisons.cli", *args], cwd=ROOT,
+                            env=env or dict(os.environ), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **kw)
+
+
+def test_run_never_touches_files_it_did_not_write(tmp_path):
+    out = tmp_path / "r"
+    (out / "data").mkdir(parents=True)
+    (out / "figures").mkdir()
+    mine = [out / "data" / "mine.csv", out / "figures" / "mine.png", out / "notes.txt"]
+    for f in mine:
+        f.write_text("the user's own file\n")
+    assert main([*TINY, "--out", str(out)]) == 0
+    assert main([*TINY, "--out", str(out)]) == 0          # and again, over its own report
+    assert all(f.read_text() == "the user's own file\n" for f in mine)
+    written = (out / MANIFEST).read_text().split()
+    assert "summary.json" in written and "data/mine.csv" not in written
+
+
+def test_a_failed_stage_leaves_the_old_report_as_it_was(tmp_path):
+    out = tmp_path / "r"
+    out.mkdir()
+    (out / "summary.json").write_text('{"passed": true}\n')
+    with pytest.raises(RuntimeError):
+        with ReportFolder(out) as folder:
+            write_text(folder.path / "summary.json", '{"passed": false}\n')
+            raise RuntimeError("killed half way")
+    assert (out / "summary.json").read_text() == '{"passed": true}\n'
+    assert [p.name for p in tmp_path.iterdir()] == ["r"]      # no staging folder left
+
+
+def test_sigterm_during_the_runs_ends_the_workers_and_keeps_the_old_report(tmp_path):
+    """SIGTERM to the main process while its workers compute: exit promptly, no worker left
+    alive, the previous complete report untouched, no partial folder left."""
+    out = tmp_path / "r"
+    assert main([*TINY, "--out", str(out)]) == 0
+    before = (out / "summary.json").read_text()
+    proc = _cli("run", "--quick", "--jobs", "2", "--out", str(out))
+    workers = []
+    deadline = time.time() + 120
+    while time.time() < deadline and len(workers) < 2:        # wait for the pool to start
+        time.sleep(0.2)
+        kids = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
+        workers = [int(p) for p in kids.stdout.split()]
+    assert workers, "the pool never started"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err[-500:]          # 128 + SIGTERM, after cleaning up
+    assert "terminated; nothing written" in err.strip().splitlines()[-1]
+    time.sleep(1.0)
+    alive = [w for w in workers if Path(f"/proc/{w}").exists()
+             and "zombie" not in Path(f"/proc/{w}/status").read_text().lower()]
+    assert not alive, f"workers {alive} outlived the main process"
+    assert (out / "summary.json").read_text() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]
+
+
+def test_report_is_utf8_whatever_the_locale(tmp_path):
+    env = dict(os.environ, LANG="C", LC_ALL="C", PYTHONIOENCODING="ascii", PYTHONUTF8="0")
+    proc = _cli(*TINY, "--out", str(tmp_path / "r"), env=env)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err[-800:]
+    text = (tmp_path / "r" / "report.md").read_text(encoding="utf-8")
+    assert text.startswith("# bicycle-xval report") and "Environment" in text
+    json.loads((tmp_path / "r" / "summary.json").read_text(encoding="utf-8"))
+
+
+def test_out_that_is_a_file_is_a_usage_error(tmp_path, capsys):
+    f = tmp_path / "report"
+    f.write_text("not a folder")
+    assert main([*TINY, "--out", str(f)]) == 2
+    assert "is a file" in capsys.readouterr().err
+    assert f.read_text() == "not a folder"
