@@ -44,7 +44,7 @@ PROBE = textwrap.dedent("""
     rows = np.stack([q, q * 0.5, -q]); drows = np.stack([dq, -dq, dq * 0.3])
     ddq, torques, lam, status = m.inverse_dynamics_step(rows, drows, np.tile(ddq_ind, (3, 1)))
     print(json.dumps({
-        "backend": m.backend, "path": str(m.library.path),
+        "backend": getattr(m, "backend", "c"), "path": str(m.library.path),
         "M": m.mass_matrix(q).tolist(), "F": m.generalized_forces(q, dq, T).tolist(),
         "D": m.constraint_jacobian(q).tolist(), "bias": m.constraint_bias(q, dq).tolist(),
         "ddq": m.forward_acceleration(q, dq, T).tolist(),
@@ -55,7 +55,7 @@ PROBE = textwrap.dedent("""
 
 
 def _env(cache: Path, cc: str | None, **extra) -> dict:
-    env = {k: v for k, v in os.environ.items() if k not in ("CC", codegen.BACKEND_ENV)}
+    env = {k: v for k, v in os.environ.items() if k not in ("CC", "BICYCLE_XVAL_BACKEND")}
     env.update(BICYCLE_XVAL_CACHE=str(cache), PYTHONPATH=str(ROOT), **extra)
     if cc is not None:
         env["CC"] = cc
