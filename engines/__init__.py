@@ -7,7 +7,7 @@
 
 from __future__ import annotations
 
-from .base import CAPABILITIES, CapabilityError, Engine, EngineError
+from .base import CAPABILITIES, CapabilityError, Engine, EngineError, EngineUsageError
 
 ENGINES = ("reference", "pinocchio", "exudyn")
 
@@ -29,4 +29,5 @@ def load_engine(name: str, model, **options) -> Engine:
     raise EngineError(f"unknown engine {name!r}; available: {', '.join(ENGINES)}")
 
 
-__all__ = ["CAPABILITIES", "ENGINES", "CapabilityError", "Engine", "EngineError", "load_engine"]
+__all__ = ["CAPABILITIES", "ENGINES", "CapabilityError", "Engine", "EngineError",
+           "EngineUsageError", "load_engine"]

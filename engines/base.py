@@ -35,6 +35,12 @@ class EngineError(RuntimeError):
     """An engine could not be built or run (missing package, unsupported model...)."""
 
 
+class EngineUsageError(EngineError, ValueError):
+    """An engine option the user gave is invalid (unknown build, a time step that does not
+    divide the output grid...): a usage error, exit status 2 in the CLI. Still an
+    `EngineError`, so code that catches those keeps working."""
+
+
 class Engine:
     """Base class: subclasses set ``name`` and ``capabilities`` and implement those methods."""
 
