@@ -87,8 +87,8 @@ STALE_SECONDS = 3600.0
 _LEGACY_TEMP = re.compile(r"^\.((thesis|disc)(-nogyro)?-[a-z0-9_]{8}|linearize-.*\.py)$")
 #: Measured on the development machine (x86-64, 2 shared cores, gcc -O2 vs numpy): one state
 #: through forward_acceleration 10 us (C) vs 3.6 ms (numpy); 1000 mass matrices 0.40 ms vs
-#: 2.4 ms; 1000 forward accelerations 3.2 ms vs 18 ms.
-NUMPY_SLOWDOWN = "about 350x slower per single state, about 6x per batch of 1000 states"
+#: 2.4 ms; 1000 forward accelerations 3.2 ms vs 18 ms; 0.5 s of stability-psid5 0.12 s vs 9.0 s.
+NUMPY_SLOWDOWN = "forward runs about 75x slower than C, batched evaluations about 6x"
 
 
 class CodegenError(RuntimeError):

@@ -126,11 +126,11 @@ def check_step(h: float, interval: float, span: float | None = None) -> int:
         k = max(1, int(interval / h))
         options = sorted({interval / k, interval / (k + 1)}, reverse=True)
         raise EngineUsageError(
-            f"the Exudyn step h = {h:g} s does not divide the output interval {interval:g} s "
-            f"(the steps must land on the output samples); fix: use {interval:g}/k s, e.g. "
+            f"the Exudyn step h = {h:g} s must divide the output interval {interval:g} s (the "
+            f"steps must land on the output samples); fix: use {interval:g}/k s, e.g. "
             + " or ".join(f"{o:.10g}" for o in options))
     if span is not None and abs(round(span / h) * h - span) > 1e-9 * max(span, 1.0):
-        raise EngineUsageError(f"the Exudyn step h = {h:g} s does not divide the run's duration "
+        raise EngineUsageError(f"the Exudyn step h = {h:g} s must divide the run's duration "
                                f"{span:g} s; fix: a step dividing both {interval:g} s and {span:g} s")
     return per
 
