@@ -500,10 +500,20 @@ def _remove(path: Path) -> None:
         path.unlink(missing_ok=True)
 
 
-def _commit(tmp: Path, target: Path) -> None:
-    """Rename a complete temporary entry into place (replacing a damaged one)."""
+def _commit(tmp: Path, target: Path, identity: dict[str, Any], files: tuple[str, ...]) -> None:
+    """Rename a complete temporary entry into place. An intact entry already there (another
+    process built it meanwhile) is kept; a damaged one is first renamed out of the way (an
+    atomic step: no process ever sees it half deleted), then removed."""
     if target.exists() or target.is_symlink():
-        _remove(target)
+        if verify_entry(target, identity, files)[0] is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+            return
+        trash = Path(tempfile.mkdtemp(prefix=temporary_prefix("trash"), dir=target.parent))
+        try:
+            os.replace(target, trash / "entry")
+        except OSError:
+            pass
+        _remove(trash)
     try:
         os.replace(tmp, target)
     except OSError:  # another process won the race: its copy is verified when loaded
@@ -615,8 +625,9 @@ def _generate_entry(root: Path, contact: str, gyroscopic: bool, backend: str, ke
                  "functions": {k: [v.size, v.symmetric] for k, v in funcs.items()}}
         if backend == "c":
             extra.update(cc=list(cc), cflags=list(CFLAGS))
-        write_manifest(tmp, _identity(contact, gyroscopic, backend, key), files, extra)
-        _commit(tmp, root / f"{variant}-{'' if backend == 'c' else 'numpy-'}{key}")
+        identity = _identity(contact, gyroscopic, backend, key)
+        write_manifest(tmp, identity, files, extra)
+        _commit(tmp, root / f"{variant}-{'' if backend == 'c' else 'numpy-'}{key}", identity, files)
     except OSError as exc:
         raise _cache_problem(root, exc) from None
     finally:
