@@ -468,7 +468,8 @@ def _is_stale(path: Path, now: float) -> bool:
         host = re.sub(r"[^A-Za-z0-9_.]", "_", socket.gethostname())[:40] or "host"
         m = re.match(rf"^{re.escape(TEMP_PREFIX)}.*-{re.escape(host)}-(\d+)-", name)
         if m and int(m.group(1)) != os.getpid():
-            return not _pid_alive(int(m.group(1)))
+            # gone, or so old that the pid must have been reused
+            return not _pid_alive(int(m.group(1))) or age > 24 * STALE_SECONDS
         return age > STALE_SECONDS and not m
     return bool(_LEGACY_TEMP.match(name)) and age > STALE_SECONDS
 
@@ -485,10 +486,10 @@ def clean_stale_temporaries(root: Path) -> list[Path]:
         return removed
     for path in entries:
         if _is_stale(path, now):
-            if path.is_dir() and not path.is_symlink():
-                shutil.rmtree(path, ignore_errors=True)
-            else:
-                path.unlink(missing_ok=True)
+            try:
+                _remove(path)
+            except OSError:      # a read-only cache: leave it
+                continue
             removed.append(path)
     return removed
 
@@ -688,14 +689,12 @@ def build(contact: str, *, gyroscopic: bool = True, force: bool = False, log=Non
     t0 = time.perf_counter()
     choice = requested_backend(backend)
     root = cache_root()
-    try:
+    try:      # (a read-only cache is fine as long as nothing has to be written to it)
         root.mkdir(parents=True, exist_ok=True)
         if not root.is_dir():
             raise NotADirectoryError(20, "not a folder")
     except OSError as exc:
         raise _cache_problem(root, exc) from None
-    if not os.access(root, os.W_OK | os.X_OK):
-        raise _cache_problem(root, PermissionError(13, "not writable"))
     clean_stale_temporaries(root)
     if choice in ("c", "auto"):
         cc = compiler_command()

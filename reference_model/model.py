@@ -110,7 +110,9 @@ class Model:
     ``name``, ``coordinates`` (the thesis order), ``independent`` / ``dependent``
     coordinate names, ``library`` (the compiled code and its cache folder), ``gyroscopic``
     (True, the thesis model; ``Model(params, gyroscopic=False)`` is a deliberately broken
-    variant without the gyroscopic terms in Qv, for the fault-injection suite).
+    variant without the gyroscopic terms in Qv, for the fault-injection suite), ``backend``
+    ('c', or 'numpy' when no C compiler works or ``backend="numpy"`` is asked for: the same
+    generated code as numpy, equal to round-off, slower; see `codegen`).
     """
 
     coordinates = COORDINATES

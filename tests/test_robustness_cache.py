@@ -304,6 +304,18 @@ def no_compiler_cache(tmp_path_factory, pristine) -> Path:
     return cache
 
 
+def test_cut_numpy_code_is_regenerated(no_compiler_cache, tmp_path, monkeypatch):
+    cache = tmp_path / "cache"
+    shutil.copytree(no_compiler_cache, cache)
+    (entry,) = cache.glob("thesis-numpy-*")
+    code = entry / "bicycle_generated.py"
+    text = code.read_text()
+    code.write_text(text[: len(text) // 2])
+    monkeypatch.setenv("BICYCLE_XVAL_CACHE", str(cache))
+    lib = codegen.build("thesis", backend="numpy")
+    assert lib.built_now and code.read_text() == text
+
+
 @pytest.mark.parametrize("cc, model", [("/nonexistent/bin/cc", "thesis"), ("/bin/false", "thesis"),
                                        ("/bin/true", "thesis"), ("/nonexistent/bin/cc", "thesis-disc")])
 def test_no_working_compiler_runs_on_numpy(no_compiler_cache, cc, model, reference_thesis,
