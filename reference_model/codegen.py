@@ -669,8 +669,11 @@ def _entry(root: Path, contact: str, gyroscopic: bool, backend: str, key: str,
             if built:
                 raise CodegenError(f"the freshly built code in {target} does not load "
                                    f"({_last_line(str(exc))}); fix: set {CACHE_ENV} to another "
-                                   "folder or report this") from None
-            _remove(target)
+                                   "folder (not on a filesystem mounted noexec)") from None
+            try:
+                _remove(target)
+            except OSError:
+                pass
             force = True
             continue
         return Library(contact, target, lib, funcs, key, built, time.perf_counter() - t0,
