@@ -79,7 +79,7 @@ def _states(x, width: int, what: str) -> tuple[np.ndarray, bool]:
     raise ValueError(f"{what} must have shape ({width},) or (N, {width}); got shape {a.shape}")
 
 
-def _torques(torques, n: int, single: bool) -> np.ndarray:
+def torque_array(torques, n: int, single: bool) -> np.ndarray:
     """Rider torques as a C-contiguous (n, 3) array: (3,) for every state, or one row per state.
 
     A scalar or any other shape is refused (a scalar used to be applied to all three)."""
@@ -211,7 +211,7 @@ class Model:
         """Qv + Qgrav + Qaero + S T (8,), T = [Mdir, Mped, Mvue] (N m); batch: T (3,) or (N, 3)."""
         dyn = self._eval("dynamics", q, dq)
         single = dyn.ndim == 1
-        T = _torques(torques, 1 if single else dyn.shape[0], single)
+        T = torque_array(torques, 1 if single else dyn.shape[0], single)
         F = dyn[..., N_Q * N_Q:N_Q * N_Q + N_Q]
         S = dyn[..., N_Q * N_Q + N_Q:].reshape(*dyn.shape[:-1], N_Q, 3)
         return F + np.einsum("...ij,...j->...i", S, T[0] if single else T)
@@ -275,7 +275,7 @@ class Model:
         n = qa.shape[0]
         if da.shape[0] != n:
             raise ValueError(f"q and dq must hold the same number of states; got {n} and {da.shape[0]}")
-        T = _torques(torques, n, single)
+        T = torque_array(torques, n, single)
         a1, a2 = baumgarte
         if self.backend != "c":
             ddq, lam, status = self._kernels["forward_batch"](qa, da, T, self._p, float(a1), float(a2))

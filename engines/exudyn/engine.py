@@ -65,6 +65,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
 from reference_model import Model
+from reference_model.model import torque_array
 from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import DEFAULT_FALL_LIMIT, THETA, Trajectory
 
@@ -391,7 +392,9 @@ class ExudynEngine(Engine):
             with quiet():
                 self._forces = TreeForces(self.model.params)
         q, dq = np.asarray(q, dtype=float), np.asarray(dq, dtype=float)
-        T = np.broadcast_to(np.asarray(torques, dtype=float), q.shape[:-1] + (3,))
+        single = q.ndim == 1
+        T = torque_array(torques, 1 if single else q.shape[0], single)
+        T = T[0] if single else T
         with quiet():
             if q.ndim == 1:
                 return self._forces(q, dq, T)
