@@ -405,3 +405,21 @@ def test_unusable_cache_path_names_the_variable(tmp_path, monkeypatch):
         codegen.build("thesis")
     text = _one_line(info.value)
     assert "BICYCLE_XVAL_CACHE" in text and str(not_a_folder) in text
+
+
+def test_concurrent_builds_keep_the_entry_committed_first(cache):
+    """Two processes building the same variant: the second to finish keeps the intact entry
+    the first committed (a process may be loading it), and replaces only a damaged one."""
+    target = _entry(cache, "thesis")
+    info = json.loads((target / "manifest.json").read_text())
+    identity = {k: info[k] for k in ("variant", "contact", "gyroscopic", "backend", "key")}
+    late = cache / (codegen.temporary_prefix("thesis") + "late")
+    shutil.copytree(target, late)
+    inode = (target / "libbicycle.so").stat().st_ino
+    codegen._commit(late, target, identity, codegen.C_FILES)
+    assert not late.exists() and (target / "libbicycle.so").stat().st_ino == inode
+    shutil.copytree(target, late)
+    (target / "libbicycle.so").write_bytes(b"damaged")
+    codegen._commit(late, target, identity, codegen.C_FILES)
+    assert codegen.verify_entry(target, identity, codegen.C_FILES)[0] is not None
+    _no_litter(cache)
