@@ -574,6 +574,12 @@ def derivation(contact: str, gyroscopic: bool = True) -> dv.Derivation:
     return dv.derive(contact, gyroscopic=gyroscopic)
 
 
+@functools.lru_cache(maxsize=None)
+def _source(contact: str, gyroscopic: bool, language: str) -> tuple[str, dict[str, GeneratedFunction]]:
+    """The generated source of a variant, once per process (CSE and printing: ~2 s)."""
+    return generate_source(derivation(contact, gyroscopic), language)
+
+
 def _intact_source(target: Path, identity: dict[str, Any]) -> tuple[str, dict] | None:
     """The generated C of a damaged C entry, if the manifest is this variant's and the source
     still matches its hash (then only the library has to be compiled again)."""
@@ -608,7 +614,7 @@ def _generate_entry(root: Path, contact: str, gyroscopic: bool, backend: str, ke
         if source is not None and backend == "c":
             src, funcs = source
         else:
-            src, funcs = generate_source(derivation(contact, gyroscopic), backend)
+            src, funcs = _source(contact, bool(gyroscopic), backend)
         if backend == "c":
             c_file = tmp / C_FILES[0]
             c_file.write_text(src, encoding="utf-8")
