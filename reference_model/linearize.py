@@ -47,8 +47,10 @@ up). ``Linearization.M/C1/K0/K2`` are in this convention, over ``[phi, delta]``,
 ``M q'' + v C1 q' + (g K0 + v^2 K2) q = [T_phi, T_delta]``.
 
 The generated numpy code is cached in ``$BICYCLE_XVAL_CACHE`` (next to the generated C), keyed
-by the code generator's key (derivation sources, sympy, contact) and this file; per parameter
-set, the speed-independent matrices are computed once and kept in memory.
+by the code generator's key (derivation sources, sympy, contact) and this file; its first line
+stamps the contact, the key and the SHA-256 of the rest, checked before the file is run (a cut
+file, or another contact's file copied over it, is regenerated). Per parameter set, the
+speed-independent matrices are computed once and kept in memory.
 """
 
 from __future__ import annotations
