@@ -54,6 +54,12 @@ class EngineLoadError(EngineError):
     built. The CLI exits 1; a run drops the engine and reports why (`engines.load_engines`)."""
 
 
+class EngineUsageError(EngineSpecError, ValueError):
+    """An engine option the user gave is invalid (unknown build, a time step that does not
+    divide the output grid...): a usage error, exit status 2 in the CLI. Still an
+    `EngineError`, so code that catches those keeps working."""
+
+
 class Engine:
     """Base class: subclasses set ``name``, ``capabilities`` (and ``contacts`` if they support
     fewer than both front-contact models) and implement those methods. Keyword arguments of

@@ -51,7 +51,7 @@ import math
 import numpy as np
 
 from reference_model import COORDINATES, Model
-from reference_model.model import DEP, IND, ForwardResult, raise_on_status
+from reference_model.model import DEP, IND, ForwardResult, raise_on_status, torque_array
 from reference_model.scenarios import Scenario, run_forward, run_inverse
 
 from .base import CAPABILITIES, Engine, EngineError
@@ -335,7 +335,9 @@ class PinocchioEngine(Engine):
     def generalized_forces(self, q, dq, torques=(0.0, 0.0, 0.0)):
         def one(q, dq, T):
             return self._kinematics(q, dq, T, False)[4] + self._bias_forces(q, dq)
-        return self._batched(one, q, dq, torques)
+        single = np.ndim(q) == 1
+        T = torque_array(torques, 1 if single else np.shape(q)[0], single)
+        return self._batched(one, q, dq, T[0] if single else T)
 
     # -- rolling constraints -----------------------------------------------------------
     def constraint_residual(self, q, dq):
@@ -378,10 +380,11 @@ class PinocchioEngine(Engine):
         a1, a2 = float(a1), float(a2)
         q = np.asarray(q, dtype=float)
         if q.ndim == 1:
-            ddq, lam, st = self._forward_one(q, np.asarray(dq, float), np.asarray(torques, float), a1, a2)
+            T = torque_array(torques, 1, True)[0]
+            ddq, lam, st = self._forward_one(q, np.asarray(dq, float), T, a1, a2)
             return ForwardResult(ddq, lam, np.array([st], dtype=np.intc))
         n = q.shape[0]
-        T = np.broadcast_to(np.asarray(torques, dtype=float), (n, 3))
+        T = torque_array(torques, n, False)
         dq = np.broadcast_to(np.asarray(dq, dtype=float), (n, N_Q))
         res = [self._forward_one(q[i], np.ascontiguousarray(dq[i]), T[i], a1, a2) for i in range(n)]
         return ForwardResult(np.array([r[0] for r in res]), np.array([r[1] for r in res]),

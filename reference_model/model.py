@@ -51,8 +51,11 @@ _dbl = ctypes.c_double
 
 
 @functools.lru_cache(maxsize=None)
-def _library(contact: str, gyroscopic: bool = True) -> codegen.Library:
-    lib = codegen.build(contact, gyroscopic=gyroscopic)
+def _library(contact: str, gyroscopic: bool = True, backend: str | None = None) -> codegen.Library:
+    """The loaded generated code of a variant (verified and loaded once per process)."""
+    lib = codegen.build(contact, gyroscopic=gyroscopic, backend=backend)
+    if lib.backend != "c":
+        return lib
     for name in lib.functions:
         fn = getattr(lib.lib, f"bx_{name}_batch")
         fn.argtypes = [_long, _dp, _dp, _dp, _dp]
@@ -76,6 +79,21 @@ def _states(x, width: int, what: str) -> tuple[np.ndarray, bool]:
     raise ValueError(f"{what} must have shape ({width},) or (N, {width}); got shape {a.shape}")
 
 
+def torque_array(torques, n: int, single: bool) -> np.ndarray:
+    """Rider torques as a C-contiguous (n, 3) array: (3,) for every state, or one row per state.
+
+    A scalar or any other shape is refused (a scalar used to be applied to all three)."""
+    T = np.asarray(torques, dtype=np.float64)
+    if T.shape == (3,):
+        return np.ascontiguousarray(np.broadcast_to(T, (n, 3)))
+    if T.ndim == 2 and T.shape == (n, 3) and not single:
+        return np.ascontiguousarray(T)
+    expected = "(3,)" if single else f"(3,) or ({n}, 3), one row per state"
+    raise ValueError(f"torques must have shape {expected} [Mdir, Mped, Mvue] in N m; got shape "
+                     f"{T.shape}" + (" (a scalar is not applied to all three: write (0, T, 0))"
+                                     if T.ndim == 0 else ""))
+
+
 @dataclass(frozen=True)
 class ForwardResult:
     """Constrained accelerations, multipliers and per-state status (0 = ok)."""
@@ -93,7 +111,9 @@ class Model:
     an allowed triangle-inequality violation), ``coordinates`` (the thesis order), ``independent`` / ``dependent``
     coordinate names, ``library`` (the compiled code and its cache folder), ``gyroscopic``
     (True, the thesis model; ``Model(params, gyroscopic=False)`` is a deliberately broken
-    variant without the gyroscopic terms in Qv, for the fault-injection suite).
+    variant without the gyroscopic terms in Qv, for the fault-injection suite), ``backend``
+    ('c', or 'numpy' when no C compiler works or ``backend="numpy"`` is asked for: the same
+    generated code as numpy, equal to round-off, slower; see `codegen`).
     """
 
     coordinates = COORDINATES
@@ -103,19 +123,23 @@ class Model:
     torque_names = TORQUE_NAMES
     body_names = BODY_NAMES
 
-    def __init__(self, params: Parameters, *, gyroscopic: bool = True):
+    def __init__(self, params: Parameters, *, gyroscopic: bool = True, backend: str | None = None):
         self.params = params
         self.contact = params.contact
         self.name = params.name
         self.warnings = params.warnings     # e.g. an allowed triangle-inequality violation
         self.gyroscopic = bool(gyroscopic)
-        self.library = _library(params.contact, self.gyroscopic)
+        self.library = _library(params.contact, self.gyroscopic, backend)
+        self.backend = self.library.backend
         self._p = np.ascontiguousarray(params.vector(), dtype=np.float64)
+        self._lock = threading.Lock()
+        if self.backend != "c":     # numpy backend: every call goes through the batch kernels
+            self._kernels = self.library.kernels
+            return
         self._pp = self._p.ctypes.data
         self._lib = self.library.lib
         # Single-state fast path: inputs are copied into fixed scratch buffers whose addresses
         # are taken once (numpy's .ctypes.data costs ~1 us per call, more than the C work).
-        self._lock = threading.Lock()
         self._in = np.zeros(3 * N_Q + 6)                   # q | dq | T (3) | ddq_ind (3)
         self._out = np.zeros(128)
         self._status = np.zeros(1, dtype=np.intc)
@@ -127,18 +151,19 @@ class Model:
 
     def __repr__(self) -> str:
         variant = "" if self.gyroscopic else ", gyroscopic=False"
+        variant += "" if self.backend == "c" else f", backend={self.backend!r}"
         return (f"Model(name={self.name!r}, contact={self.contact!r}, "
                 f"source={self.params.source!r}{variant})")
 
     def with_params(self, params: Parameters) -> "Model":
         """The same model class and variant with another parameter set (e.g. a perturbed copy)."""
-        return Model(params, gyroscopic=self.gyroscopic)
+        return Model(params, gyroscopic=self.gyroscopic, backend=self.backend)
 
     # -- generic evaluation ------------------------------------------------------------
     def _eval(self, name: str, q, dq=None, shape=None):
         fn = self.library.functions[name]
         shape = shape or (fn.size,)
-        if np.ndim(q) == 1 and np.shape(q)[0] == N_Q and (dq is None or np.shape(dq) == (N_Q,)):
+        if self.backend == "c" and np.ndim(q) == 1 and np.shape(q)[0] == N_Q and (dq is None or np.shape(dq) == (N_Q,)):
             with self._lock:
                 self._in[:N_Q] = q
                 if dq is not None:
@@ -154,9 +179,11 @@ class Model:
                 raise ValueError(f"q and dq must hold the same number of states; got {qa.shape[0]} "
                                  f"and {da.shape[0]}")
         n = qa.shape[0]
-        out = np.empty((n, fn.size))
-        getattr(self._lib, f"bx_{name}_batch")(n, qa.ctypes.data, da.ctypes.data, self._pp,
-                                               out.ctypes.data)
+        if self.backend != "c":
+            out = self._kernels[name](qa, da, self._p)
+        else:
+            out = np.empty((n, fn.size))
+            self._kernels[name](n, qa.ctypes.data, da.ctypes.data, self._pp, out.ctypes.data)
         out = out.reshape((n, *shape))
         return out[0] if single else out
 
@@ -185,12 +212,11 @@ class Model:
     def generalized_forces(self, q, dq, torques=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Qv + Qgrav + Qaero + S T (8,), T = [Mdir, Mped, Mvue] (N m); batch: T (3,) or (N, 3)."""
         dyn = self._eval("dynamics", q, dq)
-        T = np.asarray(torques, dtype=np.float64)
+        single = dyn.ndim == 1
+        T = torque_array(torques, 1 if single else dyn.shape[0], single)
         F = dyn[..., N_Q * N_Q:N_Q * N_Q + N_Q]
         S = dyn[..., N_Q * N_Q + N_Q:].reshape(*dyn.shape[:-1], N_Q, 3)
-        if T.shape[-1:] != (3,) or T.ndim > 2:
-            raise ValueError(f"torques must have shape (3,) or (N, 3) [Mdir, Mped, Mvue]; got {T.shape}")
-        return F + np.einsum("...ij,...j->...i", S, T)
+        return F + np.einsum("...ij,...j->...i", S, T[0] if single else T)
 
     def inverse_dynamics(self, q, dq, ddq) -> np.ndarray:
         """Unconstrained inverse dynamics M ddq - Qv - Qgrav (what RNEA computes), (8,)."""
@@ -234,7 +260,8 @@ class Model:
         Never raises on a singular state: the status array says (0 ok, 1 singular, 2 non-finite).
         ``baumgarte=(a1, a2)``; (0, 0) gives the exact constrained accelerations.
         """
-        if np.shape(q) == (N_Q,) and np.shape(dq) == (N_Q,) and np.shape(torques) == (3,):
+        if (self.backend == "c" and np.shape(q) == (N_Q,) and np.shape(dq) == (N_Q,)
+                and np.shape(torques) == (3,)):
             a1, a2 = baumgarte
             with self._lock:
                 buf = self._in
@@ -250,11 +277,16 @@ class Model:
         n = qa.shape[0]
         if da.shape[0] != n:
             raise ValueError(f"q and dq must hold the same number of states; got {n} and {da.shape[0]}")
-        T = np.ascontiguousarray(np.broadcast_to(np.asarray(torques, dtype=np.float64), (n, 3)))
+        T = torque_array(torques, n, single)
+        a1, a2 = baumgarte
+        if self.backend != "c":
+            ddq, lam, status = self._kernels["forward_batch"](qa, da, T, self._p, float(a1), float(a2))
+            if single:
+                return ForwardResult(ddq[0], lam[0], status[:1])
+            return ForwardResult(ddq, lam, status)
         ddq = np.empty((n, N_Q))
         lam = np.empty((n, N_C))
         status = np.empty(n, dtype=np.intc)
-        a1, a2 = baumgarte
         self._lib.bx_forward_batch(n, qa.ctypes.data, da.ctypes.data, T.ctypes.data, self._pp,
                                    float(a1), float(a2), ddq.ctypes.data, lam.ctypes.data,
                                    status.ctypes.data)
@@ -288,10 +320,13 @@ class Model:
         n = qa.shape[0]
         if da.shape[0] != n or ia.shape[0] != n:
             raise ValueError("q, dq and ddq_ind must hold the same number of states")
-        out = np.empty((n, 13))
-        status = np.empty(n, dtype=np.intc)
-        self._lib.bx_inverse_dynamics_batch(n, qa.ctypes.data, da.ctypes.data, ia.ctypes.data,
-                                            self._pp, out.ctypes.data, status.ctypes.data)
+        if self.backend != "c":
+            out, status = self._kernels["inverse_dynamics_batch"](qa, da, ia, self._p)
+        else:
+            out = np.empty((n, 13))
+            status = np.empty(n, dtype=np.intc)
+            self._lib.bx_inverse_dynamics_batch(n, qa.ctypes.data, da.ctypes.data, ia.ctypes.data,
+                                                self._pp, out.ctypes.data, status.ctypes.data)
         ddq = np.empty((n, N_Q))
         ddq[:, DEP] = out[:, :5]
         ddq[:, IND] = ia

@@ -56,8 +56,12 @@ Validation stops at the first problem and raises one :class:`ParameterError` who
 message names the file, the key (``table.key``), the problem and the fix: TOML syntax errors
 (with the line), unknown tables or keys (with the closest valid name), missing keys, values that
 are not finite real numbers (booleans and strings are not numbers), missing or unknown units,
-non-positive masses, radii or ``g``, negative ``cv``, inertia tensors that are not positive
-definite or whose principal moments violate the triangle inequality, unknown contact models.
+non-positive masses, radii or ``g``, negative ``cv``, magnitudes outside the range of any
+bicycle (:data:`PARAMETER_BOUNDS`, stated per parameter: 1e300 kg is an error naming the range;
+a plausible but unusual value, e.g. the Moon's g, is a :class:`ParameterWarning` in the same
+one-line format), inertia tensors that are not positive definite or whose principal moments
+violate the triangle inequality, unknown contact models. ``I3zx`` is answered with the
+symmetric entry ``I3xz``; a UTF-8 byte-order mark at the start of a file is accepted.
 Positive definiteness is always an error; the triangle inequality is an error with
 ``[checks] triangle = "strict"`` (the default) and, with ``"warn"`` (or
 ``allow_triangle_violation=True``), a warning kept in :attr:`Parameters.warnings` (measured
@@ -78,6 +82,7 @@ import numbers
 import os
 import re
 import tomllib
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -98,7 +103,9 @@ __all__ = [
     "PARAMETER_GROUPS",
     "PARAMETER_NAMES",
     "PARAMETER_UNITS",
+    "PARAMETER_BOUNDS",
     "ParameterError",
+    "ParameterWarning",
     "Parameters",
     "THESIS_FILE",
     "TRIANGLE_MODES",
@@ -215,6 +222,49 @@ _UNIT_KIND: dict[str, str] = {
 
 _POSITIVE: tuple[str, ...] = ("R_rear", "R_front", "m2", "m3", "m4", "m5", "g")
 _NON_NEGATIVE: tuple[str, ...] = ("cv",)
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Magnitude bounds of one parameter, SI. Outside ``[low, high]`` (applied to |value| when
+    ``magnitude``) the value is no bicycle at any scale, from a toy to a cargo bike: an error.
+    Outside ``[usual_low, usual_high]`` it is plausible but unusual: a warning (a typo in the
+    unit is the usual cause)."""
+
+    low: float
+    high: float
+    usual_low: float
+    usual_high: float
+    magnitude: bool = False      # bounds on |value| (signed lengths and products of inertia)
+    reason: str = ""
+
+
+_LENGTH = Bounds(0.0, 10.0, 0.0, 3.0, True, "a position within the bicycle")
+_WHEEL_MASS = Bounds(1e-3, 1e3, 0.05, 50.0, reason="a wheel")
+_MOMENT = Bounds(1e-9, 1e4, 1e-5, 100.0, reason="a moment of inertia of a bicycle part")
+_PRODUCT = Bounds(0.0, 1e4, 0.0, 100.0, True, "a product of inertia of a bicycle part")
+
+#: Parameter name -> its bounds (see `Bounds`): stated per parameter, checked on every
+#: construction after the signs and before the inertia tensors.
+PARAMETER_BOUNDS: dict[str, Bounds] = {
+    "R_rear": Bounds(1e-3, 10.0, 0.05, 1.5, reason="a wheel radius"),
+    "R_front": Bounds(1e-3, 10.0, 0.05, 1.5, reason="a wheel radius"),
+    **{k: _LENGTH for k in ("x3", "z3", "xa", "za", "dx4", "dz4", "x5", "z5")},
+    "m2": _WHEEL_MASS,
+    "m3": Bounds(1e-3, 1e4, 1.0, 500.0, reason="frame plus rider"),
+    "m4": Bounds(1e-3, 1e3, 0.05, 50.0, reason="a fork and handlebar"),
+    "m5": _WHEEL_MASS,
+    **{k: _MOMENT for k in ("I2xx", "I2yy", "I2zz", "I3xx", "I3yy", "I3zz", "I4xx", "I4yy",
+                            "I4zz", "I5xx", "I5yy", "I5zz")},
+    "I3xz": _PRODUCT,
+    "I4xz": _PRODUCT,
+    "g": Bounds(1e-3, 100.0, 9.7, 9.9, reason="gravity (Earth: 9.78 to 9.83 m/s^2)"),
+    "cv": Bounds(0.0, 100.0, 0.0, 5.0, reason="a rider's drag, 0.5 rho Cd A ~ 0.2 to 0.6 kg/m"),
+}
+
+
+class ParameterWarning(UserWarning):
+    """A plausible but unusual parameter value (one line, the format of ParameterError)."""
 
 # body -> (xx, yy, zz, xz or None) parameter names
 _INERTIA_KEYS: dict[int, tuple[str, str, str, str | None]] = {
@@ -339,6 +389,32 @@ def _check_signs(file: str, values: Mapping[str, float]) -> None:
                 f"({PARAMETER_DESCRIPTIONS[name]})",
                 f"use a non-negative value in {PARAMETER_UNITS[name]} (0 disables drag)",
             )
+
+
+def _check_bounds(file: str, values: Mapping[str, float]) -> None:
+    """Absurd magnitudes are errors naming the range; unusual ones warnings (PARAMETER_BOUNDS)."""
+    for name, b in PARAMETER_BOUNDS.items():
+        value = values[name]
+        if b is _MOMENT and not value > 0.0:
+            continue     # a non-positive moment: _check_inertia names the tensor not positive definite
+        x = abs(value) if b.magnitude else value
+        unit = PARAMETER_UNITS[name]
+        span = (f"|{name}| <= {b.high:g} {unit}" if b.magnitude and b.low == 0.0
+                else f"{b.low:g} to {b.high:g} {unit}")
+        if not b.low <= x <= b.high:
+            raise ParameterError(
+                file, _qualified(name),
+                f"{name} = {value!r} {unit} is outside the range of {b.reason} ({span}; "
+                f"{PARAMETER_DESCRIPTIONS[name]})",
+                f"check the value and its unit (the range is in {unit}, after unit conversion)",
+            )
+        if not b.usual_low <= x <= b.usual_high:
+            usual = (f"|{name}| <= {b.usual_high:g} {unit}" if b.magnitude and b.usual_low == 0.0
+                     else f"{b.usual_low:g} to {b.usual_high:g} {unit}")
+            warnings.warn(ParameterWarning(_one_line(
+                f"{file}: {_qualified(name)}: {name} = {value!r} {unit} is unusual for "
+                f"{b.reason} (usual: {usual}); fix: check the value and its unit, or ignore this "
+                "warning if it is intended")), stacklevel=4)
 
 
 def _principal_moments(xx: float, yy: float, zz: float, xz: float) -> tuple[float, float, float]:
@@ -501,6 +577,7 @@ class Parameters:
         for n, v in values.items():
             object.__setattr__(self, n, v)
         _check_signs(source, values)
+        _check_bounds(source, values)
         _check_triangle_mode(source, self.triangle)
         warned: list[str] = []
         for body in _INERTIA_KEYS:
@@ -644,10 +721,35 @@ def _syntax_error(file: str, text: str, exc: tomllib.TOMLDecodeError) -> Paramet
     )
 
 
+_TENSOR_ENTRY = re.compile(r"^I([2-5])([xyz])([xyz])$")
+
+
+def _tensor_entry_fix(table: str, key: str) -> str | None:
+    """The fix for an inertia-tensor entry spelled another way: I3zx is the symmetric entry
+    I3xz; products the model has no parameter for (wheels: none; frame, fork: only xz)."""
+    m = _TENSOR_ENTRY.match(key)
+    if table != "inertia" or m is None or m.group(2) == m.group(3):
+        return None
+    body, a, b = m.groups()
+    swapped = f"I{body}{b}{a}"
+    if swapped in PARAMETER_GROUPS:
+        return (f"the tensor is symmetric: {key} is the entry {swapped}; rename it to "
+                f"inertia.{swapped}")
+    has = [k for k in _INERTIA_KEYS[int(body)] if k is not None and k[2] != k[3]]
+    if has:
+        return (f"remove it: body {body} ({BODY_NAMES[int(body)]}) is symmetric about its x-z "
+                f"plane, so {key} = 0; its only product of inertia is inertia.{has[0]}")
+    return (f"remove it: body {body} ({BODY_NAMES[int(body)]}) is an axisymmetric wheel with "
+            "no product of inertia")
+
+
 def _unknown_key_error(file: str, table: str, key: str) -> ParameterError:
     local = _TABLE_MEMBERS[table]
     hint = _closest(key, local)
-    if hint is not None:
+    tensor_fix = _tensor_entry_fix(table, key)
+    if tensor_fix is not None:
+        fix = tensor_fix
+    elif hint is not None:
         fix = f"did you mean {hint!r}? rename it to {table}.{hint}"
     else:
         elsewhere = _closest(key, PARAMETER_NAMES)
@@ -849,7 +951,7 @@ def load_parameters(
             "give the path of a readable .toml parameter file",
         ) from None
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8").removeprefix("\ufeff")   # a UTF-8 BOM (some editors) is accepted
     except UnicodeDecodeError as exc:
         raise ParameterError(
             file, "(file)", f"not UTF-8 text (byte {exc.start})", "save the file as UTF-8"

@@ -239,7 +239,8 @@ def get_scenario(name: str) -> Scenario:
 # -- running on the reference model ---------------------------------------------------
 
 def run_inverse(model: Model, sc: Scenario, *, reproject: bool = False) -> InverseDynamics:
-    """Inverse kinematics (q_dep(0) = 0) then the 13x13 inverse dynamics on the grid."""
+    """Inverse kinematics (q_dep(0) = 0, beta(0) then solved from the front contact: a
+    consistent start on any model) then the 13x13 inverse dynamics on the grid."""
     if sc.kind != "inverse":
         raise ValueError(f"scenario {sc.name!r} is a forward scenario; use simulate")
     motion = inverse_kinematics(model, sc.motion, sc.t, reproject=reproject)

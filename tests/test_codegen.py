@@ -1,6 +1,9 @@
 """The generated-code cache: keyed by its sources, rebuilt when they change or when damaged,
 never committed."""
 
+import ast
+import re
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -12,14 +15,52 @@ from reference_model import codegen, load_model
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_key_depends_on_variant_and_sources(tmp_path, monkeypatch):
-    assert codegen.cache_key("thesis") != codegen.cache_key("disc")
-    extra = tmp_path / "derivation_extra.py"
-    extra.write_text("x = 1\n")
-    monkeypatch.setattr(codegen, "_KEY_SOURCES", codegen._KEY_SOURCES + (extra,))
-    before = codegen.cache_key("thesis")
-    extra.write_text("x = 2\n")  # any change to a source regenerates
-    assert codegen.cache_key("thesis") != before
+def _package_dependencies(package: Path) -> set[str]:
+    """Files of the package the generated code depends on, found without codegen's own list:
+    codegen.py, every package module it imports (transitively, relative imports anywhere in
+    the module, lazy ones included) and every file the generated C #includes."""
+    found, todo = set(), ["codegen.py"]
+    while todo:
+        name = todo.pop()
+        if name in found:
+            continue
+        found.add(name)
+        text = (package / name).read_text()
+        if not name.endswith(".py"):
+            continue
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                mods = [node.module] if node.module else [a.name for a in node.names]
+                todo += [f"{m}.py" for m in mods if (package / f"{m}.py").exists()]
+        todo += re.findall(r'#include \\?"(\w+\.c)\\?"', text)
+    return found
+
+
+def test_key_changes_when_any_source_of_the_generated_code_changes(tmp_path):
+    """Issue 11: a warm cache must never hide a derivation bug. Edit each file the generated
+    code depends on, in a copy of the package (the key's list itself is not touched, so a
+    source missing from it is caught), and each variant option: every one changes the key."""
+    package = tmp_path / "reference_model"
+    shutil.copytree(ROOT / "reference_model", package,
+                    ignore=shutil.ignore_patterns("__pycache__", "parameters"))
+    deps = _package_dependencies(package)
+    assert {"derivation.py", "params.py", "runtime.c", "codegen.py"} <= deps, deps
+
+    def key(**kw):
+        return codegen.cache_key("thesis", package_dir=package, cc=("gcc",), **kw)
+
+    base = key()
+    for name in sorted(deps):
+        path = package / name
+        original = path.read_bytes()
+        path.write_bytes(original + (b"\n/* edited */\n" if name.endswith(".c") else b"\n# edited\n"))
+        assert key() != base, f"editing {name} leaves the cache key unchanged: stale code would be used"
+        path.write_bytes(original)
+        assert key() == base
+    assert codegen.cache_key("disc", package_dir=package, cc=("gcc",)) != base
+    assert key(gyroscopic=False) != base
+    assert key(backend="numpy") != base
+    assert codegen.cache_key("thesis", package_dir=package, cc=("clang",)) != base
 
 
 def test_build_caches_and_recovers_from_damage(tmp_path, monkeypatch):

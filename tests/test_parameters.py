@@ -406,6 +406,7 @@ def test_unknown_named_model() -> None:
 moment = st.floats(min_value=1e-3, max_value=1e3, allow_nan=False, allow_infinity=False)
 
 
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
 @given(a=moment, b=moment, c=moment)
 def test_wheel_inertia_valid_iff_triangle_holds(a: float, b: float, c: float) -> None:
     values = thesis_dict() | {"I5xx": a, "I5yy": b, "I5zz": c}
@@ -417,6 +418,7 @@ def test_wheel_inertia_valid_iff_triangle_holds(a: float, b: float, c: float) ->
             Parameters(**values)
 
 
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
 @given(
     xx=moment,
     zz=moment,

@@ -54,18 +54,22 @@ after; verbose modes 0; no solution or sensor files).
 from __future__ import annotations
 
 import contextlib
+import math
+import sys
 import time
 import warnings
+from typing import Callable
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
 from reference_model import Model
+from reference_model.model import torque_array
 from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import DEFAULT_FALL_LIMIT, THETA, Trajectory
 
-from ..base import Engine, EngineError, EngineSpecError
+from ..base import Engine, EngineError, EngineSpecError, EngineUsageError
 
 try:
     import exudyn as exu
@@ -77,7 +81,7 @@ except ImportError as exc:  # pragma: no cover - exudyn is a declared dependency
 from .redundant import RedundantBuild
 from .tree import TreeBuild, TreeMassMatrix
 
-__all__ = ["ExudynEngine", "BUILDS", "SOLVERS"]
+__all__ = ["ExudynEngine", "BUILDS", "SOLVERS", "check_step", "LONG_RUN_SECONDS"]
 
 N_Q = 8
 BUILDS = {"tree": TreeBuild, "redundant": RedundantBuild}
@@ -86,7 +90,87 @@ SOLVERS = {"generalizedAlpha": "GeneralizedAlpha", "trapezoidal": "TrapezoidalIn
 # wheel, anti-roll x3 on the frame
 TORQUE_TARGETS = (("fork", 2), ("rear", 1), ("frame", 0))
 # options of the reference's simulate that have no meaning here; accepted and recorded
-_REFERENCE_ONLY = ("rtol", "atol", "constraints", "baumgarte", "progress")
+_REFERENCE_ONLY = ("rtol", "atol", "constraints", "baumgarte")
+#: Wall time per step used for the estimate before a run (s): measured on the development
+#: machine (2 cores shared with other jobs, load ~5) at h = 1e-3 s on stability-psid10
+#: (tree 1.2 ms, redundant 0.57 ms per step, ~8 Newton iterations each); smaller steps need
+#: fewer Newton iterations, so this is on the long side.
+STEP_SECONDS = {"tree": 1.2e-3, "redundant": 6e-4}
+#: A run estimated longer than this (s) is announced (steps x cost per step) and reports its
+#: progress every PROGRESS_EVERY seconds.
+LONG_RUN_SECONDS = 120.0
+PROGRESS_EVERY = 30.0
+#: After this much wall time (s) the cost per step is measured on the run itself.
+MEASURE_AFTER = 2.0
+
+
+def _stderr_line(text: str) -> None:
+    sys.stderr.write(f"bicycle-xval: {text}\n")
+    sys.stderr.flush()
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def check_step(h: float, interval: float, span: float | None = None) -> int:
+    """Steps per output interval for a fixed step ``h``; raises EngineUsageError (a usage
+    error) unless h is a positive step dividing the interval (and the span, if given)."""
+    if not (isinstance(h, (int, float)) and not isinstance(h, bool) and math.isfinite(h) and h > 0):
+        raise EngineUsageError(f"the Exudyn step must be a positive time in s; got {h!r}")
+    per = int(round(interval / h))
+    if per < 1 or abs(per * h - interval) > 1e-9 * interval:
+        k = max(1, int(interval / h))
+        options = sorted({interval / k, interval / (k + 1)}, reverse=True)
+        raise EngineUsageError(
+            f"the Exudyn step h = {h:g} s must divide the output interval {interval:g} s (the "
+            f"steps must land on the output samples); fix: use {interval:g}/k s, e.g. "
+            + " or ".join(f"{o:.10g}" for o in options))
+    if span is not None and abs(round(span / h) * h - span) > 1e-9 * max(span, 1.0):
+        raise EngineUsageError(f"the Exudyn step h = {h:g} s must divide the run's duration "
+                               f"{span:g} s; fix: a step dividing both {interval:g} s and {span:g} s")
+    return per
+
+
+class _Monitor:
+    """Per-step bookkeeping for long runs: the measured cost per step, the estimate, progress."""
+
+    def __init__(self, n_steps: int, t0: float, t1: float, what: str,
+                 notify: Callable[[str], None] | None, progress: Callable[[float], None] | None,
+                 announced: bool):
+        self.n_steps, self.t0, self.t1, self.what = n_steps, t0, t1, what
+        self.notify, self.progress = notify, progress
+        self.steps = 0
+        self.start = time.perf_counter()
+        self.measured = False
+        self.long = announced
+        self.next_report = self.start + PROGRESS_EVERY
+
+    def __call__(self, t: float) -> None:
+        self.steps += 1
+        if self.progress is not None:
+            self.progress(float(t))
+        if self.notify is None:
+            return
+        now = time.perf_counter()
+        elapsed = now - self.start
+        if not self.measured and elapsed >= MEASURE_AFTER and self.steps > 1:
+            self.measured = True
+            total = elapsed / self.steps * self.n_steps
+            if total > LONG_RUN_SECONDS:
+                self.long = True
+                self.notify(f"{self.what}: measured {elapsed / self.steps * 1e3:.2f} ms per step: "
+                            f"about {_duration(total)} in all, {_duration(total - elapsed)} left")
+        if self.long and now >= self.next_report:
+            self.next_report = now + PROGRESS_EVERY
+            done = (t - self.t0) / (self.t1 - self.t0) if self.t1 > self.t0 else 1.0
+            left = elapsed / max(done, 1e-9) - elapsed
+            self.notify(f"{self.what}: t = {t:.4f} of {self.t1:.4f} s ({100 * done:.0f}%), "
+                        f"about {_duration(left)} left")
 
 
 @contextlib.contextmanager
@@ -267,11 +351,12 @@ class ExudynEngine(Engine):
                  newton_tolerance: float = 1e-10):
         super().__init__(model)
         if build not in BUILDS:
-            raise EngineSpecError(f"unknown Exudyn build {build!r}; choose one of: {', '.join(BUILDS)}")
+            raise EngineUsageError(f"unknown Exudyn build {build!r}; choose one of: {', '.join(BUILDS)}")
         if solver not in SOLVERS:
-            raise EngineSpecError(f"unknown Exudyn solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
-        if not (isinstance(step, (int, float)) and np.isfinite(step) and step > 0):
-            raise EngineSpecError(f"step must be a positive time step in s; got {step!r}")
+            raise EngineUsageError(f"unknown Exudyn solver {solver!r}; choose one of: {', '.join(SOLVERS)}")
+        if not (isinstance(step, (int, float)) and not isinstance(step, bool) and np.isfinite(step)
+                and step > 0):
+            raise EngineUsageError(f"step must be a positive time step in s; got {step!r}")
         if build == "redundant" and model.contact != "disc":
             raise EngineError(
                 f"the redundant Exudyn build realises only the rolling-disc contact (true lowest "
@@ -309,7 +394,9 @@ class ExudynEngine(Engine):
             with quiet():
                 self._forces = TreeForces(self.model.params)
         q, dq = np.asarray(q, dtype=float), np.asarray(dq, dtype=float)
-        T = np.broadcast_to(np.asarray(torques, dtype=float), q.shape[:-1] + (3,))
+        single = q.ndim == 1
+        T = torque_array(torques, 1 if single else q.shape[0], single)
+        T = T[0] if single else T
         with quiet():
             if q.ndim == 1:
                 return self._forces(q, dq, T)
@@ -342,14 +429,21 @@ class ExudynEngine(Engine):
         Options: ``fall_limit`` (rad, default the reference's), ``t_end`` (stop early, s),
         ``every_step`` (return every step instead of the scenario's grid), ``stop_at_fall``
         (default True: a per-step check ends the run one step after |theta| passes the
-        limit; False runs to the end and cuts afterwards). The reference-only
-        options rtol, atol, constraints, baumgarte, progress are accepted and ignored (listed in
-        ``settings['ignored_options']``)."""
+        limit; False runs to the end and cuts afterwards), ``progress`` (called with the time
+        reached after every step, as the reference's), ``notify`` (one-line messages; default:
+        stderr): a run estimated longer than LONG_RUN_SECONDS (steps x cost per step) is
+        announced before it starts, re-estimated from its own cost after MEASURE_AFTER s, and
+        reports its progress every PROGRESS_EVERY s. The reference-only options rtol, atol,
+        constraints, baumgarte are accepted and ignored (listed in
+        ``settings['ignored_options']``). A step that does not divide the scenario's sampling
+        interval is an `EngineUsageError`, raised before anything runs."""
         wall0 = time.perf_counter()
         fall_limit = float(options.pop("fall_limit", DEFAULT_FALL_LIMIT))
         t_end = options.pop("t_end", None)
         every_step = bool(options.pop("every_step", False))
         stop_at_fall = bool(options.pop("stop_at_fall", True))
+        progress = options.pop("progress", None)
+        notify = options.pop("notify", _stderr_line)
         ignored = {k: options.pop(k) for k in _REFERENCE_ONLY if k in options}
         if options:
             raise TypeError(f"ExudynEngine.simulate got unknown option(s): {', '.join(options)}")
@@ -365,12 +459,15 @@ class ExudynEngine(Engine):
             if grid.size < 2:
                 raise ValueError(f"t_end = {t_end!r} leaves fewer than 2 grid samples")
         dt = float(grid[1] - grid[0])
-        per = int(round(dt / h))
         span = float(grid[-1] - grid[0])
+        per = check_step(h, dt, span)
         n_steps = int(round(span / h))
-        if per < 1 or abs(per * h - dt) > 1e-9 * dt or abs(n_steps * h - span) > 1e-9 * max(span, 1.0):
-            raise EngineError(f"the step h = {h:g} s must divide the scenario's sampling interval "
-                              f"{dt:g} s and its duration {span:g} s")
+        what = f"exudyn {self.build} on {scenario.name}"
+        estimate = n_steps * STEP_SECONDS[self.build]
+        if notify is not None and estimate > LONG_RUN_SECONDS:
+            notify(f"{what}: {n_steps} steps of h = {h:g} s, estimated {_duration(estimate)} "
+                   f"({STEP_SECONDS[self.build] * 1e3:.1f} ms per step); progress every "
+                   f"{PROGRESS_EVERY:g} s")
         init = initial_state(model, scenario)
         torque = torque_input(model, scenario)
 
@@ -383,11 +480,17 @@ class ExudynEngine(Engine):
             torque_how = add_torques(mbs, build.markers, torque, scenario.t)
             drag_how = add_drag(mbs, build.markers, float(model.params.cv))
             build.add_sensors(mbs)
-            if stop_at_fall:
-                # one cheap check per step (not in the Newton loop): Exudyn has no events, so
-                # stop one step after |theta| passes the limit; the fall is located afterwards
-                mbs.SetPreStepUserFunction(
-                    lambda mbs, t: bool(abs(build.theta_now(mbs)) < fall_limit))
+            monitor = _Monitor(n_steps, float(grid[0]), float(grid[-1]), what, notify, progress,
+                               announced=estimate > LONG_RUN_SECONDS)
+
+            def pre_step(mbs, t):
+                # one cheap call per step (not in the Newton loop): progress and, as Exudyn has
+                # no events, the fall check: stop one step after |theta| passes the limit (the
+                # fall is located afterwards)
+                monitor(t)
+                return bool(abs(build.theta_now(mbs)) < fall_limit) if stop_at_fall else True
+
+            mbs.SetPreStepUserFunction(pre_step)
             mbs.Assemble()
         build_seconds = time.perf_counter() - build_t0
 
