@@ -104,8 +104,8 @@ def load_engine(spec: str, model, **options) -> Engine:
                               f"{getattr(model, 'name', '?')!r}")
     try:
         engine = cls(model, **options)
-    except EngineSpecError as exc:
-        raise EngineSpecError(f"{_who(label, spec)}: {exc}") from exc
+    except EngineSpecError as exc:   # keep the class (EngineUsageError is one): callers match it
+        raise type(exc)(f"{_who(label, spec)}: {exc}") from exc
     except Exception as exc:  # noqa: BLE001 - report any failure of the engine's constructor
         raise EngineLoadError(f"{_who(label, spec)} raised while being built: "
                               f"{type(exc).__name__}: {_one_line(exc)}") from exc
