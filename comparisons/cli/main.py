@@ -8,6 +8,8 @@
                      [--tolerances FILE]
     bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn] [--json OUT]
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
+    bicycle-xval import FILE --from benchmark --out my.toml [--name NAME] [--allow-triangle-violation]
+    bicycle-xval export --model NAME|FILE --format benchmark --out PATH
 
 Exit status: 0 success, 1 a run failed (solver failure) or a check did not hold,
 2 usage error (bad option, unknown model or scenario, bad parameter file), always with a
@@ -225,10 +227,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a tolerance file replacing comparisons/judgments/tolerances.toml (same tables)")
     s.set_defaults(func=cmd_run)
 
+    from .bicycles import add_import_parser
     from .diagnose import add_diagnose_parser
     from .eigenvalues import add_eigenvalues_parser
+    from .export import add_export_parser
     add_diagnose_parser(sub)
     add_eigenvalues_parser(sub)
+    add_import_parser(sub)
+    add_export_parser(sub)
     return p
 
 
