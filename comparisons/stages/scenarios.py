@@ -63,7 +63,7 @@ def compare_scenarios(names, labels, runs: dict, horizons: dict) -> Section:
     """What each scenario's registry entry says is compared, with the figures' data."""
     tols = load_tolerances()
     sec = Section("Every engine on every scenario")
-    sec.text("What each scenario's registry entry (`reference_model/scenarios.py`) lists as "
+    sec.text("What each scenario's file (`reference_model/scenario_data/`) lists as "
              f"compared: M at ~{M_STATES} of the reference's states, torques and multipliers "
              "along the inverse scenarios, all eight coordinates up to the *meaningful horizon* "
              "(where two reference runs 1e-9 rad/s apart in theta_dot(0) part by more than "
