@@ -28,10 +28,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .model import Model
-from .solvers import (DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE, ConsistentState, IndependentMotion,
+from .model import DEP, IND, Model
+from .solvers import (BETA, DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE, ConsistentState, IndependentMotion,
                       InverseDynamics, Trajectory, consistent_state, inverse_dynamics,
-                      inverse_kinematics, simulate)
+                      inverse_kinematics, simulate, solve_beta)
 
 THESIS_GRID = (0.0, 0.01, 629)   # start, step, samples: 0:0.01:2*pi
 
@@ -186,10 +186,19 @@ def get_scenario(name: str) -> Scenario:
 # -- running on the reference model ---------------------------------------------------
 
 def run_inverse(model: Model, sc: Scenario, *, reproject: bool = False) -> InverseDynamics:
-    """Inverse kinematics (q_dep(0) = 0) then the 13x13 inverse dynamics on the grid."""
+    """Inverse kinematics then the 13x13 inverse dynamics on the grid. The dependent
+    coordinates start at 0 (the thesis: its upright frame pitch is 0) with beta(0) re-solved
+    from [rD]_z = 0 when the geometry needs it (recorded in ``motion.info['initial_correction']``)."""
     if sc.kind != "inverse":
         raise ValueError(f"scenario {sc.name!r} is a forward scenario; use simulate")
-    motion = inverse_kinematics(model, sc.motion, sc.t, reproject=reproject)
+    q_start = np.zeros(8)
+    q_start[IND] = sc.motion(sc.t[0])[0]
+    q1, its = solve_beta(model, q_start)   # q_dep(0) = 0 holds for the thesis's upright pitch
+    motion = inverse_kinematics(model, sc.motion, sc.t, q1[DEP], reproject=reproject)
+    if its:   # another geometry: beta(0) from [rD]_z = 0, as consistent_state does forward
+        motion.info["initial_correction"] = (
+            f"beta(0) re-solved from [rD]_z = 0 for this geometry: 0 -> {q1[BETA]:+.6f} rad "
+            f"({its} Newton iteration{'s' if its > 1 else ''})")
     return inverse_dynamics(model, motion)
 
 

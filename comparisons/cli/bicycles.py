@@ -65,3 +65,50 @@ def run_import(args) -> int:
     for w in params.warnings:
         print(f"  warning: {w}")
     return EXIT_OK
+
+
+# -- run --model / --scenario-file ------------------------------------------------------------
+
+def add_run_model_options(parser) -> None:
+    """``run``'s --model and --scenario-file (both repeatable; --model also comma-separated)."""
+    parser.add_argument("--model", action="append", default=None, metavar="NAME|FILE",
+                        help="run every scenario that makes sense for this bicycle (named model "
+                             "or parameter/benchmark file) on every engine, with its stability "
+                             "picture; repeatable or comma-separated [the thesis's full run]")
+    parser.add_argument("--scenario-file", action="append", default=None, type=Path,
+                        metavar="FILE", help="also run this scenario file (repeatable) on the "
+                                             "model it names and on every --model")
+
+
+def with_models(opts, models: list[str] | None, files: list[Path] | None):
+    """``opts`` carrying the models and scenario files of the command line, each checked here
+    (a bad file or name is one line, exit 2, before any run)."""
+    import dataclasses
+
+    from reference_model.scenario_files import ScenarioFileError
+    from ..stages.cases import build_cases, model_spec
+
+    names = [s.strip() for raw in (models or []) for s in raw.split(",")]
+    if models is not None and not all(names):
+        raise UsageError("--model has an empty entry; give a named model or a file, e.g. "
+                         "--model thesis,my.toml")
+    specs = []
+    for n in dict.fromkeys(names):
+        m = model_spec(n)              # ParameterError: one line, exit 2
+        if m.spec in {s.spec for s in specs}:
+            continue
+        specs.append(m)
+    paths = []
+    for f in files or []:
+        if not f.is_file():
+            raise UsageError(f"--scenario-file: no file {str(f)!r}; give a scenario .toml file "
+                             "(format: reference_model/scenario_files.py)")
+        paths.append(str(f))
+    opts = dataclasses.replace(opts, models=tuple(specs), scenario_files=tuple(paths))
+    try:
+        build_cases(opts.scenarios, opts.models, opts.scenario_files)
+    except ScenarioFileError as exc:
+        raise UsageError(f"--scenario-file: {exc}") from None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    return opts

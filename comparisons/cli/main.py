@@ -5,7 +5,7 @@
     bicycle-xval inverse-dynamics --model thesis --scenario zigzag --out FILE.csv
     bicycle-xval simulate --model thesis --scenario stability-psid10 --out FILE.csv
     bicycle-xval run [--out DIR] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
-                     [--tolerances FILE]
+                     [--tolerances FILE] [--model NAME|FILE ...] [--scenario-file FILE ...]
     bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn] [--json OUT]
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
     bicycle-xval import FILE --from benchmark --out my.toml [--name NAME] [--allow-triangle-violation]
@@ -148,6 +148,8 @@ def cmd_run(args) -> int:
     except SelectionError as exc:
         raise UsageError(str(exc)) from None
     opts = dataclasses.replace(opts, workers=args.jobs)
+    from .bicycles import with_models
+    opts = with_models(opts, args.model, args.scenario_file)
     before = os.environ.get(TOLERANCES_ENV)
     try:
         if args.tolerances is not None:   # worker processes inherit it
@@ -225,6 +227,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="worker processes [the machine's cores, never more than the stages]")
     s.add_argument("--tolerances", type=Path, default=None,
                    help="a tolerance file replacing comparisons/judgments/tolerances.toml (same tables)")
+    from .bicycles import add_run_model_options
+    add_run_model_options(s)
     s.set_defaults(func=cmd_run)
 
     from .bicycles import add_import_parser

@@ -59,8 +59,23 @@ def _verdict(summary: dict) -> list[str]:
         + (f", {unobservable} not observable by the engine" if unobservable else "") + ".",
         "- The thesis's claims: " + (", ".join(f"{v} {k}" for k, v in sorted(verdicts.items()))
                                      or "none judged") + ".",
+        *_models(summary),
         "", "How to read this report: `docs/report.md` in the repository. Tolerances and their "
         "reasons: `comparisons/judgments/tolerances.toml`. Machine-readable: `summary.json`.", ""]
+
+
+def _models(summary: dict) -> list[str]:
+    """The verdict block's lines on the models of a --model / --scenario-file run (none for the
+    thesis's own run): name, source, contact, and every model's warnings, said here."""
+    out = []
+    for m in summary.get("models", []):
+        out.append(f"- Model {m['name']}: {m['source']}, contact {m['contact']}"
+                   + (", **with warnings** (below)." if m["warnings"] else "."))
+        out += [f"  - **Warning** ({m['name']}): {w}" for w in m["warnings"]]
+    if summary.get("not_run"):
+        out.append(f"- Not run: {len(summary['not_run'])} scenario-model pair(s), each with its "
+                   "reason in 'Models of this run'.")
+    return out
 
 
 def _failures(summary: dict, localization) -> list[str]:
