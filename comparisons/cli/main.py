@@ -8,7 +8,8 @@
                      [--tolerances FILE] [--model NAME|FILE ...] [--scenario-file FILE ...]
     bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn] [--json OUT]
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
-    bicycle-xval import FILE --from benchmark --out my.toml [--name NAME] [--allow-triangle-violation]
+    bicycle-xval import FILE --from benchmark --out my.toml [--name NAME]
+                        [--allow-triangle-violation]
     bicycle-xval export --model NAME|FILE --format benchmark --out PATH
 
 Exit status: 0 success, 1 a run failed (solver failure) or a check did not hold,

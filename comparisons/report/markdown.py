@@ -54,9 +54,11 @@ def _verdict(summary: dict) -> list[str]:
         f"{' (quick subset of scenarios and states)' if summary.get('quick') else ''}.",
         f"- {len(comps)} comparisons, {n_judged} judged against a tolerance, {n_fail} failed; "
         f"the rest are reported (the row says who judges them).",
-        f"- Fault injection: {len(faults)} fault-engine pairs, "
-        f"{sum(f['verdict'] == 'localized' for f in faults)} detected and localized"
-        + (f", {unobservable} not observable by the engine" if unobservable else "") + ".",
+        (f"- Fault injection: {len(faults)} fault-engine pairs, "
+         f"{sum(f['verdict'] == 'localized' for f in faults)} detected and localized"
+         + (f", {unobservable} not observable by the engine" if unobservable else "") + "."
+         if "engine_sections" not in summary else
+         f"- Fault injection and the engine sections: {summary['engine_sections']}."),
         "- The thesis's claims: " + (", ".join(f"{v} {k}" for k, v in sorted(verdicts.items()))
                                      or "none judged") + ".",
         *_models(summary),

@@ -23,7 +23,9 @@ start; inverse: beta(0) from [rD]_z = 0), and the correction is reported. What m
   section (`stages/stability.py`).
 
 The expected differences written for the thesis (its contact against the disc) are dropped on
-M. A model named "thesis" keeps the built-in names (so the thesis's claims are judged).
+M. A scenario on the named model it was written for keeps its built-in name (``--model
+thesis``: the thesis's scenarios, so its claims are judged; ``--model benchmark``: the IFToMM
+manoeuvres too, when selected with --scenarios).
 
 ``--scenario-file F`` (repeatable): F's scenario runs on the model it names, and on every
 --model as well (as ``<name>-on-<model>``).
@@ -121,8 +123,8 @@ def build_cases(names, models: tuple[ModelSpec, ...], files: tuple[str, ...]
     for m in models:
         for n in names:
             sc = get_scenario(n)
-            if m.spec == "thesis" and sc.model == "thesis":
-                cases.append(Case(n, sc, "thesis"))
+            if sc.model == m.spec:            # the scenario's own model: as built in
+                cases.append(Case(n, sc, m.spec))
                 continue
             why = not_applicable(sc)
             if why is not None:

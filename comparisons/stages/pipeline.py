@@ -313,6 +313,9 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         summary["models"] = _models_used(opts, case_list)
         summary["not_run"] = [{"scenario": r.scenario, "model": r.model, "reason": r.reason}
                               for r in not_run]
+    if opts.models:
+        summary["engine_sections"] = ("not run: they are about the thesis and benchmark "
+                                      "bicycles; run without --model for them")
     timings["judging in the main process"] = round(time.perf_counter() - t0, 3)
     timings["engine_run_seconds"] = {f"{n} on {lab}": round(r.seconds, 3)
                                      for (lab, n), r in sorted(runs.items())}
