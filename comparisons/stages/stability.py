@@ -119,7 +119,8 @@ def judge_run(model: Model, mode: str, speed: float, traj) -> dict:
                f"{measured:+.4f} /s")
     else:
         real = lin[np.abs(lin.imag) <= 1e-12 * np.abs(lin)]
-        predicted = complex(real[np.argmin(np.abs(real))])   # the slow real mode
+        pool = real if real.size else lin
+        predicted = complex(pool[np.argmin(np.abs(pool.real))])   # the slow real mode
         fit = _pick(identify_eigenvalues(traj), "capsize", predicted)
         measured = fit.real
         how = f"capsize eigenvalue from the run (matrix pencil) {_cx(fit)} /s"
