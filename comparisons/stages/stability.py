@@ -157,7 +157,9 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
     rows, panels = [], []
     for mode, factor, speed in run_speeds(crit):
         lines = {}
-        for label in [lab for (md, v, lab) in runs if md == mode and v == speed]:
+        # in the engines' fixed order, not the order the pool finished them (identical inputs,
+        # identical report)
+        for label in [lab for lab in ENGINE_LABELS if (mode, speed, lab) in runs]:
             traj = runs[(mode, speed, label)]
             lines[label] = (traj.t, traj.q[:, 3])
             j = judge_run(model, mode, speed, traj)
@@ -171,7 +173,7 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
                 "passed": j["passed"], "measured": j["measured"], "predicted": j["expected"],
                 "linear": j["predicted"], "localized_to": f"measured {j['measured']:+.4f} /s",
                 "note": j["how"]})
-        for label in [lab for (md, v, lab) in errors if md == mode and v == speed]:
+        for label in [lab for lab in ENGINE_LABELS if (mode, speed, lab) in errors]:
             err = errors[(mode, speed, label)]
             rows.append((mode, f"{factor:g} x = {speed:.4f}", label, "-", "-", "-", "FAIL", err))
             sec.comparisons.append({
