@@ -242,3 +242,22 @@ def test_run_model_mistakes_are_one_line(tmp_path, capsys):
 def test_a_thesis_contact_model_gets_no_stability_picture_but_a_reason():
     from comparisons.stages.stability import applies
     assert "contact 'disc'" in applies("thesis") and applies("disc") is None
+
+
+def test_which_scenarios_run_on_which_model():
+    # the rules of comparisons/stages/cases.py: a scenario on the named model it was written
+    # for keeps its name; on another bicycle it is renamed, bound to that model, and the
+    # expected differences written for the thesis's contact are dropped; the IFToMM manoeuvres
+    # (benchmark's critical speeds) do not apply to another bicycle
+    from comparisons.stages.cases import build_cases, model_spec
+    names = ("check", "replay", "stability-psid10", "benchmark-v4")
+    cases, skipped = build_cases(names, (model_spec("thesis"), model_spec("benchmark")), ())
+    by_name = {c.name: c for c in cases}
+    assert set(by_name) == {"check", "replay", "stability-psid10", "check-on-benchmark",
+                            "replay-on-benchmark", "stability-psid10-on-benchmark",
+                            "benchmark-v4"}
+    assert by_name["replay-on-benchmark"].scenario.model == "benchmark"
+    assert by_name["replay-on-benchmark"].scenario.torques == "zigzag"   # the model's own ID
+    assert by_name["stability-psid10"].scenario.expected_differences      # thesis: kept
+    assert by_name["stability-psid10-on-benchmark"].scenario.expected_differences == ()
+    assert [(s.scenario, s.model) for s in skipped] == [("benchmark-v4", "thesis")]
