@@ -9,6 +9,13 @@ Stages (each a top-level call, run in worker processes by `pool.run_tasks`, long
 * the benchmark bicycle: terms, each IFToMM manoeuvre, Exudyn's convergence (`benchmark`);
 * the fault-injection suite, per engine (`faults`).
 
+With ``--model`` (`Options.models`) the scenarios run as cases bound to each model
+(`cases.build_cases`: what makes sense on another bicycle, and why the rest is not run), each
+disc-contact model gets its stability stages (`stability`: eigenvalues against speed, runs
+below and above each critical speed), and the engine sections and faults, which are about the
+thesis and benchmark bicycles, are left out; ``--scenario-file`` adds cases to either run.
+Without them the run is exactly the thesis's.
+
 Then, in this process, what depends on them: each scenario's comparisons, the thesis's claims,
 the localization of anything that failed, the summary table. `run_comparison` returns a
 `ComparisonResult` of plain data; `comparisons.report` writes it. Run times are kept apart
