@@ -57,9 +57,11 @@ def run_scenario(label: str, engine, model, scenario, kinds=("inverse", "forward
                 res = engine.run_inverse(scenario)
             m = res.motion
             bad = int(np.count_nonzero(res.status))
+            how = "solved at every sample" if bad == 0 else f"{bad} samples failed"
+            if "initial_correction" in m.info:
+                how += f"; {m.info['initial_correction']}"
             return Run(label, scenario.name, model.name, "inverse",
-                       "completed" if bad == 0 else "failed",
-                       "solved at every sample" if bad == 0 else f"{bad} samples failed",
+                       "completed" if bad == 0 else "failed", how,
                        time.perf_counter() - t0, m.t, m.q, m.dq, res.T, res.lam,
                        ddq=getattr(res, "ddq", None))
         traj = engine.simulate(scenario)

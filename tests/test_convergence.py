@@ -273,3 +273,19 @@ def test_energy_drifts_refuses_drag_and_torques(disc):
     sc = dataclasses.replace(free_roll_scenario(), torques=(0.0, 1.0, 0.0))
     with pytest.raises(ValueError, match="rider torques"):
         energy_drifts(free_roll_model(disc), sc)
+
+
+def test_energy_drifts_refuses_named_and_sampled_torques(disc):
+    # the zig-zag's torques (a named function) and non-zero samples do work: refused; all-zero
+    # samples do none: the run is made
+    from reference_model.scenarios import TorqueSamples
+    from comparisons.judgments.energy import applies_torques
+    base = free_roll_scenario()
+    for torques in ("zigzag", TorqueSamples((0.0, 1.0), ((0.0, 0.0, 0.0), (0.0, 0.5, 0.0)))):
+        sc = dataclasses.replace(base, torques=torques)
+        assert applies_torques(sc)
+        with pytest.raises(ValueError, match="rider torques"):
+            energy_drifts(free_roll_model(disc), sc)
+    zero = TorqueSamples((0.0, 1.0), ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
+    assert not applies_torques(dataclasses.replace(base, torques=zero))
+    assert not applies_torques(base)

@@ -304,3 +304,16 @@ def test_interface(disc, thesis):
         tree.simulate(SCENARIOS["stability-psid0"], tolerance=1)
     with pytest.raises(EngineError, match="takes no options"):
         load_engine("reference", disc, build="tree")
+
+
+def test_the_scenarios_fall_limit_stops_the_run(disc):
+    # a scenario's own fall limit (here 0.5 rad instead of the default 1.4) ends Exudyn's run
+    # where it ends the reference's: same located fall time (1e-4 s, as above), last row on the
+    # limit (the event row is interpolated onto it)
+    import dataclasses
+    sc = dataclasses.replace(SCENARIOS["stability-psid0"], fall_limit=0.5)
+    ref = run_forward(disc, sc, constraints="projection", rtol=1e-11)
+    tr = load_engine("exudyn", disc, build="tree", step=H).simulate(sc)
+    assert ref.status == tr.status == "fell", tr.message
+    assert abs(tr.t_end - ref.t_end) < 1e-4, (tr.t_end, ref.t_end)
+    assert abs(abs(tr.q[-1, 3]) - 0.5) < 1e-9

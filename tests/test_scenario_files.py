@@ -1,6 +1,7 @@
 """Scenario files (issue 13): the built-in scenarios as TOML package data, loaded the same way
-as a user's file, equal to the Python registry field by field; torque samples from a CSV with
-a named interpolation; one-line errors naming key, problem and fix."""
+as a user's file (the registry is read from them), equal to the scenarios written in Python
+(tests/python_scenarios.py) field by field; torque samples from a CSV with a named
+interpolation; one-line errors naming key, problem and fix."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from python_scenarios import PYTHON_SCENARIOS
 from reference_model.scenario_files import (BUILTIN_DIR, ScenarioFileError, load_builtin_scenarios,
                                             load_scenario, scenario_toml_text)
 from reference_model.scenarios import (SCENARIOS, MOTIONS, Scenario, TorqueSamples, run_forward,
@@ -40,13 +42,19 @@ def write(tmp_path: Path, text: str, name: str = "sc.toml") -> Path:
     return path
 
 
-def test_builtin_files_equal_the_registry_field_by_field():
+def test_builtin_files_equal_the_python_statement_field_by_field():
+    """The registry is read from the files; the scenarios written in Python (the registry as it
+    was, tests/python_scenarios.py) are the independent statement they must equal."""
     loaded = load_builtin_scenarios()
-    assert list(loaded) == list(SCENARIOS)
-    for name, sc in SCENARIOS.items():
+    assert list(loaded) == list(PYTHON_SCENARIOS)
+    for name, sc in PYTHON_SCENARIOS.items():
         for f in dataclasses.fields(Scenario):
             assert getattr(loaded[name], f.name) == getattr(sc, f.name), (name, f.name)
-    assert sorted(p.stem for p in BUILTIN_DIR.glob("*.toml")) == sorted(SCENARIOS)
+    assert sorted(p.stem for p in BUILTIN_DIR.glob("*.toml")) == sorted(PYTHON_SCENARIOS)
+
+
+def test_the_registry_is_the_files():
+    assert SCENARIOS == load_builtin_scenarios()
 
 
 def test_writer_and_loader_round_trip(tmp_path):

@@ -5,9 +5,12 @@
     bicycle-xval inverse-dynamics --model thesis --scenario zigzag --out FILE.csv
     bicycle-xval simulate --model thesis --scenario stability-psid10 --out FILE.csv
     bicycle-xval run [--out DIR] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
-                     [--tolerances FILE]
+                     [--tolerances FILE] [--model NAME|FILE ...] [--scenario-file FILE ...]
     bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn] [--json OUT]
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
+    bicycle-xval import FILE --from benchmark --out my.toml [--name NAME]
+                        [--allow-triangle-violation]
+    bicycle-xval export --model NAME|FILE --format benchmark --out PATH
 
 Exit status: 0 success, 1 a run failed (solver failure) or a check did not hold,
 2 usage error (bad option, unknown model or scenario, bad parameter file), always with a
@@ -154,6 +157,8 @@ def cmd_run(args) -> int:
         raise UsageError(str(exc)) from None
     opts = dataclasses.replace(opts, workers=args.jobs,
                                engine_options=_run_engine_options(opts.engines, args.engine_options))
+    from .bicycles import with_models
+    opts = with_models(opts, args.model, args.scenario_file)
     before = os.environ.get(TOLERANCES_ENV)
     try:
         if args.tolerances is not None:   # worker processes inherit it
@@ -261,16 +266,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help="worker processes [the machine's cores, never more than the stages]")
     s.add_argument("--tolerances", type=Path, default=None,
                    help="a tolerance file replacing comparisons/judgments/tolerances.toml (same tables)")
+    from .bicycles import add_run_model_options
+    add_run_model_options(s)
     s.set_defaults(func=cmd_run)
 
+    from .bicycles import add_import_parser
     from .diagnose import add_diagnose_parser
     from .eigenvalues import add_eigenvalues_parser
     from .compare_trajectory import add_compare_trajectory_parser
     from .engines import add_engines_parser
     add_engines_parser(sub)
     add_compare_trajectory_parser(sub)
+    from .export import add_export_parser
     add_diagnose_parser(sub)
     add_eigenvalues_parser(sub)
+    add_import_parser(sub)
+    add_export_parser(sub)
     return p
 
 

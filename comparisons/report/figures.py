@@ -247,6 +247,16 @@ def constraint_residuals(panels, bound):
     return fig
 
 
+def _by_psid(kv):
+    """Sort key of 'stability-psidN[-on-<model>]' names: (model, N)."""
+    rest = kv[0].partition("psid")[2]
+    speed, _, model = rest.partition("-on-")
+    try:
+        return (model, float(speed))
+    except ValueError:
+        return (model + kv[0], 0.0)
+
+
 def stability_study(runs):
     """theta against time for the stability runs (thesis Figs. 6-4 to 6-7), a panel per engine;
     ``runs``: engine -> {scenario: (t, theta, status, t_end)}."""
@@ -254,10 +264,11 @@ def stability_study(runs):
     engines = list(runs)
     fig, axes = plt.subplots(1, len(engines), figsize=(WIDTH, 3.8), sharey=True, squeeze=False)
     for ax, eng in zip(axes[0], engines):
-        for name, (t, theta, status, t_end) in sorted(
-                runs[eng].items(), key=lambda kv: float(kv[0].split("psid")[1])):
-            ax.plot(t, theta, label=f"psi_dot(0) = {name.split('psid')[1]} rad/s ({status} "
-                                    f"{t_end:.2f} s)")
+        for name, (t, theta, status, t_end) in sorted(runs[eng].items(), key=_by_psid):
+            head, _, rest = name.partition("psid")
+            speed, _, model = rest.partition("-on-")     # stability-psidN[-on-<model>]
+            ax.plot(t, theta, label=f"psi_dot(0) = {speed} rad/s{f' on {model}' if model else ''}"
+                                    f" ({status} {t_end:.2f} s)")
         ax.set_title(eng)
         ax.set_xlabel("t [s]")
         ax.legend(fontsize=6)

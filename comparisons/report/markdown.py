@@ -62,13 +62,30 @@ def _verdict(summary: dict) -> list[str]:
         f"{' (quick subset of scenarios and states)' if summary.get('quick') else ''}.",
         f"- {len(comps)} comparisons, {n_judged} judged against a tolerance, {n_fail} failed; "
         f"the rest are reported (the row says who judges them).",
-        f"- Fault injection: {len(faults)} fault-engine pairs, "
-        f"{sum(f['verdict'] == 'localized' for f in faults)} detected and localized"
-        + (f", {unobservable} not observable by the engine" if unobservable else "") + ".",
+        (f"- Fault injection: {len(faults)} fault-engine pairs, "
+         f"{sum(f['verdict'] == 'localized' for f in faults)} detected and localized"
+         + (f", {unobservable} not observable by the engine" if unobservable else "") + "."
+         if "engine_sections" not in summary else
+         f"- Fault injection and the engine sections: {summary['engine_sections']}."),
         "- The thesis's claims: " + (", ".join(f"{v} {k}" for k, v in sorted(verdicts.items()))
                                      or "none judged") + ".",
+        *_models(summary),
         "", "How to read this report: `docs/report.md` in the repository. Tolerances and their "
         "reasons: `comparisons/judgments/tolerances.toml`. Machine-readable: `summary.json`.", ""]
+
+
+def _models(summary: dict) -> list[str]:
+    """The verdict block's lines on the models of a --model / --scenario-file run (none for the
+    thesis's own run): name, source, contact, and every model's warnings, said here."""
+    out = []
+    for m in summary.get("models", []):
+        out.append(f"- Model {m['name']}: {m['source']}, contact {m['contact']}"
+                   + (", **with warnings** (below)." if m["warnings"] else "."))
+        out += [f"  - **Warning** ({m['name']}): {w}" for w in m["warnings"]]
+    if summary.get("not_run"):
+        out.append(f"- Not run: {len(summary['not_run'])} scenario-model pair(s), each with its "
+                   "reason in 'Models of this run'.")
+    return out
 
 
 def _failures(summary: dict, localization) -> list[str]:

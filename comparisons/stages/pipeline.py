@@ -9,6 +9,13 @@ Stages (each a top-level call, run in worker processes by `pool.run_tasks`, long
 * the benchmark bicycle: terms, each IFToMM manoeuvre, Exudyn's convergence (`benchmark`);
 * the fault-injection suite, per engine (`faults`).
 
+With ``--model`` (`Options.models`) the scenarios run as cases bound to each model
+(`cases.build_cases`: what makes sense on another bicycle, and why the rest is not run), each
+disc-contact model gets its stability stages (`stability`: eigenvalues against speed, runs
+below and above each critical speed), and the engine sections and faults, which are about the
+thesis and benchmark bicycles, are left out; ``--scenario-file`` adds cases to either run.
+Without them the run is exactly the thesis's.
+
 Then, in this process, what depends on them: each scenario's comparisons, the thesis's claims,
 the localization of anything that failed, the summary table. `run_comparison` returns a
 `ComparisonResult` of plain data; `comparisons.report` writes it. Run times are kept apart
@@ -50,6 +57,8 @@ class Options:
     engines: tuple[str, ...]          # engine names or specs, reference first
     quick: bool = False
     workers: int | None = None
+    models: tuple = ()                # cases.ModelSpec of each --model (none: the thesis's run)
+    scenario_files: tuple[str, ...] = ()   # --scenario-file paths
     engine_options: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()   # spec -> options
 
     def options_for(self) -> dict:
@@ -141,18 +150,36 @@ def environment(setups) -> dict:
 
 # -- the stages ----------------------------------------------------------------------------------
 
-def _tasks(opts: Options, labels: list[str]) -> list[Task]:
-    from reference_model.scenarios import get_scenario
-    from . import benchmark, engines, faults, scenarios
+def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task]:
+    from . import benchmark, engines, faults, scenarios, stability
     from .runs import cost, run_one, setups_for
     setups = {s.label: s for s in setups_for(opts.engines, opts.options_for())}
-    tasks = [Task(("run", lab, n), run_one, (setups[lab], n), cost(lab, n), f"{n} on {lab}")
-             for n in opts.scenarios for lab in labels]
-    for n in opts.scenarios:
-        sc = get_scenario(n)
+    # the built-in scenarios by name (today's run, unchanged); the others as objects + model
+    tasks = [Task(("run", lab, c.name), run_one,
+                  (setups[lab], c.name) if c.origin == "built-in" and not opts.models
+                  else (setups[lab], c.scenario, c.model),
+                  cost(lab, c.name), f"{c.name} on {lab}")
+             for c in cases for lab in labels]
+    for c in cases:
+        sc = c.scenario
         if sc.kind == "forward" and "trajectory" in sc.compared:
-            tasks.append(Task(("horizon", n), scenarios.horizon_of, (n,), 0.3,
-                              f"{n}: meaningful horizon"))
+            tasks.append(Task(("horizon", c.name), scenarios.horizon_of,
+                              (c.name,) if c.origin == "built-in" and not opts.models
+                              else (sc,), 0.3, f"{c.name}: meaningful horizon"))
+    for m in opts.models:
+        if m.spec not in critical:
+            continue
+        tasks.append(Task(("stability-curves", m.spec), stability.stability_curves, (m.spec,),
+                          0.5, f"{m.name}: eigenvalues against speed"))
+        for mode, factor, speed in stability.run_speeds(critical[m.spec]):
+            for lab in labels:
+                if lab in stability.ENGINE_LABELS:
+                    tasks.append(Task(("stability-run", m.spec, mode, speed, lab),
+                                      stability.stability_run, (m.spec, lab, speed),
+                                      0.3 if lab == "reference" else 3.0,
+                                      f"{m.name}: {factor:g} x {mode} speed on {lab}"))
+    if opts.models:   # the engine sections are about the thesis and benchmark bicycles
+        return tasks
     quick = opts.quick
     if "pinocchio" in opts.engines:
         n = 50 if quick else 200
@@ -223,6 +250,9 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
     from . import benchmark, engines, faults, scenarios
     from .runs import setups_for
 
+    from .cases import build_cases
+    from .stability import applies, critical as critical_speeds
+
     t_start = time.perf_counter()
     setups, dropped = _buildable(opts)
     if dropped:
@@ -232,10 +262,15 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         for name, reason in dropped:
             progress(f"engine {name} dropped: {reason}")
     labels = [s.label for s in setups]
-    tasks = _tasks(opts, labels)
+    case_list, not_run = build_cases(opts.scenarios, opts.models, opts.scenario_files)
+    cases = {c.name: c.scenario for c in case_list}
+    names = list(cases)
+    critical = {m.spec: critical_speeds(m.spec) for m in opts.models if applies(m.contact) is None}
+    tasks = _tasks(opts, labels, case_list, critical)
     progress(f"{len(tasks)} stages on {opts.workers or 'all'} worker(s): "
-             f"{len(opts.scenarios)} scenario(s) on {', '.join(labels)}, engine sections, "
-             "faults ...")
+             f"{len(names)} scenario(s) on {', '.join(labels)}"
+             + (", engine sections, faults ..." if not opts.models else
+                f", the stability of {len(critical)} model(s) ..."))
     done = run_tasks(tasks, opts.workers, progress)
     timings = {"stages": {t.label: round(done[t.key].seconds, 3) for t in tasks}}
 
@@ -244,7 +279,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         return (r.value, None) if r.error is None else (None, _failed_stage(title, r.error))
 
     runs = {}
-    for n in opts.scenarios:
+    for n in names:
         for lab in labels:
             r = done[("run", lab, n)]
             runs[(lab, n)] = r.value if r.error is None else Run(
@@ -252,11 +287,17 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
     t0 = time.perf_counter()
     horizons = {key[1]: r.value for key, r in done.items()
                 if isinstance(key, tuple) and key[0] == "horizon" and r.error is None}
-    rows, checks, corrections = scenarios.reference_rows(opts.scenarios, runs)
+    rows, checks, corrections = scenarios.reference_rows(names, runs, cases)
     from reference_model import load_model
     by_label = {s.label: s for s in setups}
-    sections = [scenarios.compare_scenarios(opts.scenarios, by_label, runs, horizons)]
-    claims = judge_claims(runs, labels, load_model("thesis"), opts.scenarios)
+    sections = [scenarios.compare_scenarios(names, by_label, runs, horizons, cases)]
+    # the thesis's claims are about the thesis bicycle: judged on its scenarios only
+    thesis_names = [n for n in names if n in opts.scenarios and cases[n].model == "thesis"]
+    claims = judge_claims(runs, labels, load_model("thesis"),
+                          opts.scenarios if not opts.models else thesis_names)
+    if opts.models:
+        sections.insert(0, _models_section(opts, not_run))
+        sections += _stability_sections(opts, critical, done)
 
     def add(key, title, build=lambda v: v):
         if key in done:
@@ -320,10 +361,17 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "faults": fault_rows,
         "checks": checks,
         "initial_corrections": corrections,
-        "expected_differences": _expected_differences(opts.scenarios),
+        "expected_differences": _expected_differences(names, cases),
         "environment": environment(setups),
         "quick": opts.quick,
     }
+    if opts.models or opts.scenario_files:
+        summary["models"] = _models_used(opts, case_list)
+        summary["not_run"] = [{"scenario": r.scenario, "model": r.model, "reason": r.reason}
+                              for r in not_run]
+    if opts.models:
+        summary["engine_sections"] = ("not run: they are about the thesis and benchmark "
+                                      "bicycles; run without --model for them")
     timings["judging in the main process"] = round(time.perf_counter() - t0, 3)
     timings["engine_run_seconds"] = {f"{n} on {lab}": round(r.seconds, 3)
                                      for (lab, n), r in sorted(runs.items())}
@@ -331,7 +379,60 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
     return ComparisonResult(opts, summary, sections, localization, runs, timings)
 
 
-def _expected_differences(names) -> list[dict]:
-    from reference_model.scenarios import get_scenario
+def _expected_differences(names, cases) -> list[dict]:
     return [{"scenario": n, "quantity": e.quantity, "engines": e.engines, "expected": e.expected,
-             "reason": e.reason} for n in names for e in get_scenario(n).expected_differences]
+             "reason": e.reason} for n in names for e in cases[n].expected_differences]
+
+
+def _models_used(opts: Options, case_list) -> list[dict]:
+    """summary.json's ``models``: every model a case ran on (name, source, contact, warnings)."""
+    from .cases import model_spec
+    specs = {m.spec: m for m in opts.models}
+    for c in case_list:
+        if c.model not in specs:
+            specs[c.model] = model_spec(c.model)
+    return [m.as_dict() for m in specs.values()]
+
+
+def _models_section(opts: Options, not_run) -> Section:
+    """What a run with --model covers: its models, what was not run and why."""
+    sec = Section("Models of this run")
+    sec.table(("model", "source", "contact", "warnings"),
+              [(m.name, m.source, m.contact, "; ".join(m.warnings) or "-") for m in opts.models])
+    sec.text("Every built-in scenario that makes sense for a bicycle runs on each model as "
+             "`<scenario>-on-<model>`; initial states written for the thesis geometry are made "
+             "consistent for the model's (the corrections are listed with the reference's "
+             "runs). The replay and check-forward torques are the model's own inverse dynamics "
+             "of zigzag and check, fed forward. The thesis's claims are about the thesis "
+             "bicycle: they are judged only on the thesis's scenarios (model `thesis`). The "
+             "engine sections (term by term, convergence, energy, fault injection, the "
+             "benchmark bicycle) are about the thesis and benchmark bicycles: run without "
+             "--model for them.")
+    if not_run:
+        sec.table(("scenario", "model", "not run because"),
+                  [(r.scenario, r.model, r.reason) for r in not_run])
+    return sec
+
+
+def _stability_sections(opts: Options, critical: dict, done: dict) -> list[Section]:
+    from .stability import applies, stability_section
+    out = []
+    for m in opts.models:
+        why = applies(m.contact)
+        if why is not None:
+            sec = Section(f"Stability of {m.name} ({m.source})")
+            sec.text(f"Not computed: {why}.")
+            out.append(sec)
+            continue
+        curves_r = done[("stability-curves", m.spec)]
+        runs, errors = {}, {}
+        for key, r in done.items():
+            if isinstance(key, tuple) and key[0] == "stability-run" and key[1] == m.spec:
+                if r.error is None:
+                    runs[key[2:]] = r.value
+                else:
+                    errors[key[2:]] = r.error
+        out.append(stability_section(m, critical[m.spec],
+                                     curves_r.value if curves_r.error is None else None,
+                                     runs, errors))
+    return out

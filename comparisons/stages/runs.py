@@ -10,7 +10,7 @@ An *engine setup* is an engine with its options, labelled as the report names it
 | exudyn-tree  | exudyn     | forward only: kinematic tree, generalized-alpha, h = 1e-3 s, the     |
 |              |            | model's own front contact (user constraints for the thesis contact) |
 
-`run_one` is a top-level function of (label, scenario name), so the pipeline farms runs out to
+`run_one` is a top-level function of (label, scenario, model spec), so the pipeline farms runs out to
 worker processes: the report's numbers do not depend on the order or the process they ran in.
 """
 
@@ -88,12 +88,18 @@ def setups_for(engines, options: dict | None = None) -> list[EngineSetup]:
     return out
 
 
-def run_one(setup: EngineSetup, scenario: str) -> Run:
-    """Run ``scenario`` on ``setup`` (a top-level function: worker processes call it)."""
+def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
+    """Run ``scenario`` (a built-in's name, or a `Scenario`) on ``setup`` and on ``model`` (a
+    named model or a parameter-file path; default the scenario's own). A top-level function of
+    picklable arguments: worker processes call it."""
+    import dataclasses
+
     from reference_model import load_model
     from reference_model.scenarios import get_scenario
 
-    sc = get_scenario(scenario)
+    sc = get_scenario(scenario) if isinstance(scenario, str) else scenario
+    if model is not None and model != sc.model:
+        sc = dataclasses.replace(sc, model=model)
     label = setup.label
     model = load_model(sc.model)
     if sc.kind not in setup.kinds:
@@ -104,6 +110,7 @@ def run_one(setup: EngineSetup, scenario: str) -> Run:
 
 def cost(label: str, scenario: str) -> float:
     """A rough run time for scheduling (s), measured on the 2-core machine."""
+    scenario = scenario.split("-on-")[0]
     if scenario in ("check", "zigzag"):
         return 0.1 if label == "reference" else 0.8
     per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6}.get(label, 1.0)

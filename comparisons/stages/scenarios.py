@@ -24,9 +24,10 @@ CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative
 M_STATES = 100           # states along a run at which M is compared
 
 
-def horizon_of(name: str):
-    """The meaningful horizon of a forward scenario (two reference runs; a stage of its own)."""
-    sc = get_scenario(name)
+def horizon_of(scenario):
+    """The meaningful horizon of a forward scenario (a built-in's name or a `Scenario`; two
+    reference runs; a stage of its own)."""
+    sc = get_scenario(scenario) if isinstance(scenario, str) else scenario
     return reference_horizon(load_model(sc.model), sc)
 
 
@@ -42,12 +43,14 @@ def analytic_check(run: Run, model) -> dict:
                         f"{len(run.t)} samples"}
 
 
-def reference_rows(names, runs: dict) -> tuple[list[dict], list[dict], dict[str, str]]:
-    """(rows of the reference's runs, analytic checks, initial-state corrections by scenario)."""
+def reference_rows(names, runs: dict, cases: dict | None = None
+                   ) -> tuple[list[dict], list[dict], dict[str, str]]:
+    """(rows of the reference's runs, analytic checks, initial-state corrections by scenario);
+    ``cases`` maps names that are not built-ins to their scenarios."""
     rows, checks, corrections = [], [], {}
     for name in names:
         run = runs[("reference", name)]
-        model = load_model(get_scenario(name).model)
+        model = load_model(_scenario(name, cases).model)
         C = model.constraint_residual(run.q, run.dq) if run.t.size else np.zeros((1, 5))
         rows.append({"scenario": name, "kind": run.kind, "status": run.status,
                      "t_end": f"{run.t_end:.3f}", "max_abs_C": f"{np.abs(C).max():.1e}"})
@@ -55,15 +58,22 @@ def reference_rows(names, runs: dict) -> tuple[list[dict], list[dict], dict[str,
             checks.append(analytic_check(run, model))
         if run.trajectory is not None and "initial_correction" in run.trajectory.settings:
             corrections[name] = run.trajectory.settings["initial_correction"]
+        elif "re-solved" in run.message:   # an inverse run on another geometry
+            corrections[name] = run.message.split("; ", 1)[1]
     return rows, checks, corrections
 
 
-def compare_scenarios(names, setups: dict, runs: dict, horizons: dict) -> Section:
+def _scenario(name: str, cases: dict | None):
+    return cases[name] if cases and name in cases else get_scenario(name)
+
+
+def compare_scenarios(names, setups: dict, runs: dict, horizons: dict, cases: dict | None = None
+                      ) -> Section:
     """What each scenario's registry entry says is compared, with the figures' data."""
     tols = load_tolerances()
     labels = list(setups)
     sec = Section("Every engine on every scenario")
-    sec.text("What each scenario's registry entry (`reference_model/scenarios.py`) lists as "
+    sec.text("What each scenario's file (`reference_model/scenario_data/`) lists as "
              f"compared: M at ~{M_STATES} of the reference's states, torques and multipliers "
              "along the inverse scenarios, all eight coordinates up to the *meaningful horizon* "
              "(where two reference runs 1e-9 rad/s apart in theta_dot(0) part by more than "
@@ -75,7 +85,7 @@ def compare_scenarios(names, setups: dict, runs: dict, horizons: dict) -> Sectio
     figures = Section("figures")      # collected apart: they follow the table
     built: dict[tuple[str, str], object] = {}
     for name in names:
-        sc = get_scenario(name)
+        sc = _scenario(name, cases)
         model = load_model(sc.model)
         ref = runs[("reference", name)]
         here = {lab: runs[(lab, name)] for lab in labels
@@ -84,10 +94,10 @@ def compare_scenarios(names, setups: dict, runs: dict, horizons: dict) -> Sectio
             step = max(1, len(ref.t) // M_STATES)
             engines = {}
             for lab in labels:
-                if lab != "reference" and (lab, model.name) not in built:
-                    built[(lab, model.name)] = setups[lab].build(model)
+                if lab != "reference" and (lab, sc.model) not in built:
+                    built[(lab, sc.model)] = setups[lab].build(model)
                 if lab != "reference":
-                    engines[lab] = built[(lab, model.name)]
+                    engines[lab] = built[(lab, sc.model)]
             comps += compare_mass_matrix(name, model, ref.q[::step], engines, tols)
         if sc.kind == "inverse":
             for lab, r in here.items():

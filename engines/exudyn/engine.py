@@ -67,7 +67,7 @@ from scipy.optimize import brentq
 from reference_model import Model
 from reference_model.model import torque_array
 from reference_model.scenarios import Scenario, initial_state, torque_input
-from reference_model.solvers import DEFAULT_FALL_LIMIT, THETA, Trajectory
+from reference_model.solvers import THETA, Trajectory
 
 from ..base import Engine, EngineError, EngineSpecError, EngineUsageError
 
@@ -426,7 +426,7 @@ class ExudynEngine(Engine):
     def simulate(self, scenario: Scenario, **options) -> Trajectory:
         """Forward run of ``scenario`` from its projected initial state.
 
-        Options: ``fall_limit`` (rad, default the reference's), ``t_end`` (stop early, s),
+        Options: ``fall_limit`` (rad, default the scenario's), ``t_end`` (stop early, s),
         ``every_step`` (return every step instead of the scenario's grid), ``stop_at_fall``
         (default True: a per-step check ends the run one step after |theta| passes the
         limit; False runs to the end and cuts afterwards), ``progress`` (called with the time
@@ -438,7 +438,7 @@ class ExudynEngine(Engine):
         ``settings['ignored_options']``). A step that does not divide the scenario's sampling
         interval is an `EngineUsageError`, raised before anything runs."""
         wall0 = time.perf_counter()
-        fall_limit = float(options.pop("fall_limit", DEFAULT_FALL_LIMIT))
+        fall_limit = float(options.pop("fall_limit", scenario.fall_limit))
         t_end = options.pop("t_end", None)
         every_step = bool(options.pop("every_step", False))
         stop_at_fall = bool(options.pop("stop_at_fall", True))

@@ -1,0 +1,71 @@
+"""``bicycle-xval export``: a model written in another description.
+
+    bicycle-xval export --model NAME|FILE --format benchmark --out PATH
+
+Formats are rows of `EXPORT_FORMATS`: a name, what it writes, and the writer
+``(model, out) -> str`` (one line for the terminal). ``benchmark`` writes Meijaard et al.
+(2007) Table 1 names (`reference_model.benchmark_files.write_benchmark`), as TOML, JSON or
+BicycleParameters' .txt by the suffix of ``--out``; a model without a benchmark counterpart
+(thesis contact, drag, wheels with Izz != Ixx) is refused with the list of what has none.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .errors import EXIT_OK, UsageError
+
+
+@dataclass(frozen=True)
+class ExportFormat:
+    """One row of the format table."""
+
+    name: str
+    help: str
+    suffixes: tuple[str, ...]          # accepted suffixes of --out
+    write: Callable[[object, Path], str]
+
+
+def _write_benchmark(model, out: Path) -> str:
+    from reference_model.benchmark_files import write_benchmark
+    values = write_benchmark(model.params, out)
+    return f"{len(values)} Table 1 values of {model.name!r} -> {out}"
+
+
+EXPORT_FORMATS: dict[str, ExportFormat] = {f.name: f for f in (
+    ExportFormat("benchmark", "Meijaard et al. (2007) Table 1 names (.toml, .json or "
+                 "BicycleParameters' .txt by the suffix of --out)", (".toml", ".json", ".txt"),
+                 _write_benchmark),
+)}
+
+
+def add_export_parser(subparsers) -> None:
+    """Register ``export`` on the CLI's subparsers."""
+    s = subparsers.add_parser("export", help="write a model in another description "
+                                             f"({', '.join(EXPORT_FORMATS)})")
+    s.add_argument("--model", default="thesis",
+                   help="named model (thesis, thesis-disc, benchmark) or a parameter file [thesis]")
+    s.add_argument("--format", required=True, choices=tuple(EXPORT_FORMATS),
+                   help="; ".join(f"{f.name}: {f.help}" for f in EXPORT_FORMATS.values()))
+    s.add_argument("--out", required=True, type=Path, help="the file to write")
+    s.set_defaults(func=run_export)
+
+
+def run_export(args) -> int:
+    """The ``export`` command: writes ``--out`` (atomically) and prints one line."""
+    from reference_model import load_model
+
+    fmt = EXPORT_FORMATS[args.format]
+    if args.out.suffix.lower() not in fmt.suffixes:
+        raise UsageError(f"--out {args.out}: --format {fmt.name} writes "
+                         f"{', '.join(fmt.suffixes)} files; name it e.g. "
+                         f"{args.out.with_suffix(fmt.suffixes[0]).name}")
+    if args.out.is_dir():
+        raise UsageError(f"--out {args.out} is a folder; give a file name")
+    model = load_model(args.model)
+    print(fmt.write(model, args.out))
+    for w in model.warnings:
+        print(f"  warning: {w}")
+    return EXIT_OK
