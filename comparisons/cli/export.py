@@ -1,6 +1,6 @@
 """``bicycle-xval export``: a model written in another description.
 
-    bicycle-xval export --model NAME|FILE --format benchmark --out PATH
+    bicycle-xval export --model NAME|FILE --format benchmark|urdf|json --out PATH
 
 Formats are rows of `EXPORT_FORMATS`: a name, what it writes, and the writer
 ``(model, out) -> str`` (one line for the terminal). ``benchmark`` writes Meijaard et al.
@@ -34,10 +34,23 @@ def _write_benchmark(model, out: Path) -> str:
     return f"{len(values)} Table 1 values of {model.name!r} -> {out}"
 
 
+def _write_description(fmt: str):
+    def write(model, out: Path) -> str:
+        from reference_model.export import export_model
+        path = export_model(model.params, fmt, out)
+        return f"{model.name!r} as {fmt.upper()} -> {path}"
+    return write
+
+
 EXPORT_FORMATS: dict[str, ExportFormat] = {f.name: f for f in (
     ExportFormat("benchmark", "Meijaard et al. (2007) Table 1 names (.toml, .json or "
                  "BicycleParameters' .txt by the suffix of --out)", (".toml", ".json", ".txt"),
                  _write_benchmark),
+    ExportFormat("urdf", "the four bodies and the thesis's joint chain for robotics engines "
+                 "(URDF cannot express the rolling contact; the file says so)", (".urdf",),
+                 _write_description("urdf")),
+    ExportFormat("json", "everything, the rolling-contact constraints included, for any engine",
+                 (".json",), _write_description("json")),
 )}
 
 

@@ -76,12 +76,15 @@ def cmd_inverse_dynamics(args) -> int:
     print(f"{sc.name} on {model.name} ({model.contact} contact): {len(frame)} samples -> {args.out}")
     print(f"  max |T| = [{', '.join(f'{v:.6g}' for v in np.abs(res.T).max(0))}] N m "
           f"(Mdir, Mped, Mvue); max |C| = {np.abs(C).max():.2e}")
+    if res.motion.info.get("initial_correction"):
+        print(f"  initial state: {res.motion.info['initial_correction']}")
     return EXIT_OK
 
 
 def cmd_simulate(args) -> int:
-    if not 0 < args.rtol < 1:
-        raise UsageError(f"--rtol must be in (0, 1); got {args.rtol}")
+    if not RTOL_MIN <= args.rtol < 1:
+        raise UsageError(f"--rtol must be in [{RTOL_MIN:g}, 1) (scipy's DOP853 cannot go below "
+                         f"about 100 machine epsilons); got {args.rtol}")
     if not args.atol > 0:
         raise UsageError(f"--atol must be positive; got {args.atol}")
     if not 0 < args.fall_limit <= np.pi:
@@ -89,8 +92,11 @@ def cmd_simulate(args) -> int:
     if args.engine != "exudyn" and (args.build is not None or args.step is not None):
         raise UsageError("--build and --step apply to --engine exudyn only (other engines: "
                          "--engine-option key=value)")
-    if args.step is not None and not 0 < args.step <= 0.1:
-        raise UsageError(f"--step must be in (0, 0.1] s; got {args.step}")
+    if args.step is not None:
+        from engines.exudyn.engine import check_step
+        if not 0 < args.step <= 0.1:
+            raise UsageError(f"--step must be in (0, 0.1] s; got {args.step}")
+        check_step(args.step, 0.01)     # must divide the 0.01 s output grid (a usage error)
     sc = _scenario(args.scenario, "forward")
     model = _load(args.model, args.contact)
     from engines import load_engine, split_options
@@ -285,6 +291,9 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: scipy's DOP853 raises a smaller rtol to 100 eps (2.2e-14), with a warning
+RTOL_MIN = 2.3e-14
+
 #: options whose value may start with a minus sign (a negative speed): argparse would read
 #: ``--speeds -5:5:1`` as two options, so the pair is joined into ``--speeds=-5:5:1``
 SIGNED_VALUE_OPTIONS = ("--speeds",)
@@ -308,14 +317,23 @@ def main(argv: list[str] | None = None) -> int:
     from reference_model import ModelEvaluationError, ParameterError
     from reference_model.scenarios import UnknownScenarioError
     from engines import EngineError, EngineSpecError
+    from reference_model.codegen import CodegenError
     from reference_model.solvers import ConstraintSolveError
 
     import signal
+    import warnings
+
+    from reference_model.params import ParameterWarning
+
+    def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+        print(f"bicycle-xval: warning: {message}", file=sys.stderr)
+    show = warnings.showwarning
 
     from ..stages.pool import raise_terminated
     previous = signal.getsignal(signal.SIGTERM)
     if previous in (signal.SIG_DFL, None):   # SIGTERM unwinds like Ctrl-C: staging folders go
         signal.signal(signal.SIGTERM, raise_terminated)
+    warnings.showwarning = _one_line_warning   # a ParameterWarning is one line, like an error
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         args = build_parser().parse_args(_join_signed_values(argv))
@@ -323,7 +341,7 @@ def main(argv: list[str] | None = None) -> int:
     except (UsageError, ParameterError, UnknownScenarioError, EngineSpecError) as exc:
         print(f"bicycle-xval: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    except (ModelEvaluationError, ConstraintSolveError, EngineError) as exc:
+    except (ModelEvaluationError, ConstraintSolveError, EngineError, CodegenError) as exc:
         print(f"bicycle-xval: failed: {exc}", file=sys.stderr)
         return EXIT_FAIL
     except OSError as exc:
@@ -337,6 +355,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     finally:
         signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+        warnings.showwarning = show
 
 
 if __name__ == "__main__":
