@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from . import figures, frames, markdown
-from .files import ReportFolder, write_csv, write_text
+from .files import ReportFolder, write_bytes, write_csv, write_text
 from .html import write_html
 
 
@@ -28,17 +28,28 @@ def _json_default(x):
     return str(x)
 
 
+def draw_figures(result, workers: int | None = None) -> dict[str, bytes]:
+    """Every figure of ``result`` as PNG bytes, drawn in worker processes (matplotlib draws on
+    one core; the figures are independent)."""
+    from ..stages.pool import Task, run_tasks
+    figs = [f for sec in result.sections for f in sec.figures]
+    tasks = [Task(f.name, figures.draw_png, (f.kind, f.data), 1.0, f"figure {f.name}") for f in figs]
+    done = run_tasks(tasks, workers)
+    failed = [f"{k}: {r.error}" for k, r in done.items() if r.error]
+    if failed:
+        raise RuntimeError(f"drawing a figure failed: {failed[0]}")
+    return {f.name: done[f.name].value for f in figs}
+
+
 def write_report(result, out: Path, data: bool = True, html: bool = True,
                  progress: Callable[[str], None] = lambda s: None) -> Path:
     """Write the report of ``result`` into ``out`` (a folder); returns the path of report.md."""
+    pngs = draw_figures(result, result.options.workers)
+    progress(f"  {len(pngs)} figures drawn")
     with ReportFolder(out) as folder:
         root = folder.path
-        n_fig = 0
-        for sec in result.sections:
-            for fig in sec.figures:
-                figures.save_figure(fig.kind, fig.data, root / "figures" / fig.name)
-                n_fig += 1
-        progress(f"  {n_fig} figures drawn")
+        for name, png in pngs.items():
+            write_bytes(root / "figures" / name, png)
         if data:
             for (label, name), run in sorted(result.runs.items()):
                 if run.t.size:
