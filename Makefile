@@ -9,7 +9,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 STAMP = $(VENV)/.installed
 
-.PHONY: venv test report bench clean
+.PHONY: venv test report example bench clean
 
 venv: $(STAMP)
 
@@ -25,6 +25,9 @@ test: $(STAMP)
 
 report: $(STAMP)
 	$(VENV)/bin/bicycle-xval run --out reports/latest
+
+example: $(STAMP)  ## the committed example report: markdown, figures, summary.json (no CSVs, no HTML)
+	$(VENV)/bin/bicycle-xval run --out reports/example --no-data --no-html
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/run.py

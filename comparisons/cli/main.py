@@ -176,7 +176,8 @@ def cmd_run(args) -> int:
         else:
             os.environ[TOLERANCES_ENV] = before
     _progress("writing the report ...")
-    path = write_report(result, args.out, progress=_progress)
+    path = write_report(result, args.out, data=not args.no_data, html=not args.no_html,
+                        progress=_progress)
     passed = result.summary["passed"]
     _progress(f"report written to {path} and report.html in "
               f"{result.timings['total_seconds']:.1f} s of runs: "
@@ -268,6 +269,10 @@ def build_parser() -> argparse.ArgumentParser:
     from .engines import add_engine_option_argument as _add_opt
     _add_opt(s)
     s.add_argument("--quick", action="store_true", help="a fast subset")
+    s.add_argument("--no-data", action="store_true",
+                   help="do not write data/<scenario>_<engine>.csv (the runs' samples)")
+    s.add_argument("--no-html", action="store_true",
+                   help="do not write report.html (report.md and summary.json only)")
     s.add_argument("--jobs", type=int, default=None,
                    help="worker processes [the machine's cores, never more than the stages]")
     s.add_argument("--tolerances", type=Path, default=None,
