@@ -68,7 +68,8 @@ RUNTIME_C = PACKAGE_DIR / "runtime.c"
 #: the derivation (the equations), params.py (the parameter layout p[i]), runtime.c (the
 #: KKT solves, #included), codegen.py (how code is printed), numpy_runtime.py (the numpy
 #: backend's solves). Editing any of them changes the cache key.
-KEY_SOURCES = ("derivation.py", "params.py", "runtime.c", "codegen.py", "numpy_runtime.py")
+KEY_SOURCES = ("derivation.py", "params.py", "runtime.c", "codegen.py", "numpy_runtime.py",
+               "benchmark.py", "benchmark_files.py")   # params.py imports these (file formats)
 CACHE_ENV = "BICYCLE_XVAL_CACHE"
 BACKEND_ENV = "BICYCLE_XVAL_BACKEND"
 BACKENDS = ("c", "numpy")
