@@ -58,7 +58,7 @@ def run_scenario(label: str, engine, model, scenario, kinds=("inverse", "forward
             m = res.motion
             bad = int(np.count_nonzero(res.status))
             how = "solved at every sample" if bad == 0 else f"{bad} samples failed"
-            if "initial_correction" in m.info:
+            if m.info.get("beta_correction"):     # a geometry whose start needed it
                 how += f"; {m.info['initial_correction']}"
             return Run(label, scenario.name, model.name, "inverse",
                        "completed" if bad == 0 else "failed", how,

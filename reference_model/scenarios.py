@@ -191,14 +191,9 @@ def run_inverse(model: Model, sc: Scenario, *, reproject: bool = False) -> Inver
     from [rD]_z = 0 when the geometry needs it (recorded in ``motion.info['initial_correction']``)."""
     if sc.kind != "inverse":
         raise ValueError(f"scenario {sc.name!r} is a forward scenario; use simulate")
-    q_start = np.zeros(8)
-    q_start[IND] = sc.motion(sc.t[0])[0]
-    q1, its = solve_beta(model, q_start)   # q_dep(0) = 0 holds for the thesis's upright pitch
-    motion = inverse_kinematics(model, sc.motion, sc.t, q1[DEP], reproject=reproject)
-    if its:   # another geometry: beta(0) from [rD]_z = 0, as consistent_state does forward
-        motion.info["initial_correction"] = (
-            f"beta(0) re-solved from [rD]_z = 0 for this geometry: 0 -> {q1[BETA]:+.6f} rad "
-            f"({its} Newton iteration{'s' if its > 1 else ''})")
+    # q_dep(0) = 0 is the thesis's start (its upright frame pitch is 0); inverse_kinematics
+    # re-solves beta(0) from [rD]_z = 0 for any other geometry and reports the correction
+    motion = inverse_kinematics(model, sc.motion, sc.t, np.zeros(len(DEP)), reproject=reproject)
     return inverse_dynamics(model, motion)
 
 

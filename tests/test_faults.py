@@ -190,7 +190,8 @@ def test_parameter_bodies():
 # -- diagnose ------------------------------------------------------------------------------------
 
 def _args(file, **kw):
-    base = dict(file=str(file), against=None, engines="pinocchio", states=8, json=None)
+    base = dict(file=str(file), model=None, against=None, engines="pinocchio", engine_specs=[],
+                engine_options=[], states=8, json=None)
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -242,13 +243,13 @@ def test_diagnose_parser_and_bad_inputs(tmp_path):
     assert (args.file, args.against, args.engines, str(args.json)) == \
         ("f.toml", "thesis", "pinocchio,exudyn", "o.json")
     assert args.func is run_diagnose
-    with pytest.raises(UsageError, match=r"^--engines: unknown engine 'pinochio'; use .*pinocchio,exudyn"):
+    with pytest.raises(UsageError, match=r"^--engines: unknown engine 'pinochio'; available: .*pinocchio"):
         run_diagnose(_args(THESIS_FILE, engines="pinochio"))
-    with pytest.raises(UsageError, match="^--engines: unknown engine 'reference'"):
+    with pytest.raises(UsageError, match="^--engines: 'reference' is the model under test"):
         run_diagnose(_args(THESIS_FILE, engines="reference"))
     with pytest.raises(UsageError, match="^--engines: no engine given"):
         run_diagnose(_args(THESIS_FILE, engines=" , "))
-    with pytest.raises(UsageError, match="^--states must be an integer >= 4; got 2"):
+    with pytest.raises(UsageError, match="^--states must be an integer from 4 to 2000.*got 2"):
         run_diagnose(_args(THESIS_FILE, states=2))
     with pytest.raises(UsageError, match="^--json .* is a folder"):
         run_diagnose(_args(THESIS_FILE, json=tmp_path))
@@ -260,7 +261,7 @@ def test_diagnose_parser_and_bad_inputs(tmp_path):
         run_diagnose(_args(broken))
     with pytest.raises(ParameterError, match="unknown model 'thesys'.*did you mean 'thesis'"):
         run_diagnose(_args(THESIS_FILE, against="thesys"))
-    with pytest.raises(ValueError, match="engines must be"):
+    with pytest.raises(ValueError, match="engines must name at least one engine other than the reference"):
         diagnose(THESIS_FILE, engines=())
     with pytest.raises(ValueError, match="n_states must be an integer >= 4"):
         diagnose(THESIS_FILE, n_states=1)

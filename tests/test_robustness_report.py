@@ -58,7 +58,8 @@ def test_sigterm_during_the_runs_ends_the_workers_and_keeps_the_old_report(tmp_p
     out = tmp_path / "r"
     assert main([*TINY, "--out", str(out)]) == 0
     before = (out / "summary.json").read_text()
-    proc = _cli("run", "--quick", "--jobs", "2", "--out", str(out))
+    proc = _cli("run", "--quick", "--scenarios", "check,stability-psid10", "--sections", "none",
+                "--jobs", "2", "--out", str(out))
     workers = []
     deadline = time.time() + 120
     while time.time() < deadline and len(workers) < 2:        # wait for the pool to start

@@ -56,6 +56,13 @@ def run_diagnose(args) -> int:
     if "reference" in names:
         raise UsageError("--engines: 'reference' is the model under test; name the engines to "
                          "compare with it, e.g. pinocchio")
+    from engines import EngineSpecError
+    from engines.registry import resolve
+    for name in names:
+        try:
+            resolve(name)
+        except EngineSpecError as exc:
+            raise UsageError(f"--engines: {exc}") from None
     if not 4 <= args.states <= MAX_STATES:
         raise UsageError(f"--states must be an integer from 4 to {MAX_STATES} (the least-squares "
                          f"fit's matrix grows with it); got {args.states}")

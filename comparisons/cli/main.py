@@ -161,7 +161,15 @@ def cmd_run(args) -> int:
         opts = select(args.scenarios, args.quick, args.engines)
     except SelectionError as exc:
         raise UsageError(str(exc)) from None
-    opts = dataclasses.replace(opts, workers=args.jobs,
+    from ..stages.pipeline import SECTIONS
+    sections = tuple(x.strip() for x in (args.sections or ",".join(SECTIONS)).split(",") if x.strip())
+    if sections == ("none",):
+        sections = ()
+    unknown = [x for x in sections if x not in SECTIONS]
+    if unknown:
+        raise UsageError(f"--sections: unknown section {unknown[0]!r}; choose from "
+                         f"{', '.join(SECTIONS)} (comma-separated), or none for the scenarios only")
+    opts = dataclasses.replace(opts, workers=args.jobs, sections=sections,
                                engine_options=_run_engine_options(opts.engines, args.engine_options))
     from .bicycles import with_models
     opts = with_models(opts, args.model, args.scenario_file)
@@ -269,6 +277,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .engines import add_engine_option_argument as _add_opt
     _add_opt(s)
     s.add_argument("--quick", action="store_true", help="a fast subset")
+    s.add_argument("--sections", default=None,
+                   help="engine sections besides the scenarios, comma-separated: terms, exudyn, "
+                        "benchmark, faults, or none [all]")
     s.add_argument("--no-data", action="store_true",
                    help="do not write data/<scenario>_<engine>.csv (the runs' samples)")
     s.add_argument("--no-html", action="store_true",

@@ -42,6 +42,8 @@ from .pool import Task, run_tasks
 from .results import Section
 
 QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
+#: the parts of a run besides the scenarios, selectable with --sections (all by default)
+SECTIONS = ("terms", "exudyn", "benchmark", "faults")
 ENGINE_NAMES = ("reference", "pinocchio", "exudyn")
 
 
@@ -60,6 +62,7 @@ class Options:
     models: tuple = ()                # cases.ModelSpec of each --model (none: the thesis's run)
     scenario_files: tuple[str, ...] = ()   # --scenario-file paths
     engine_options: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()   # spec -> options
+    sections: tuple[str, ...] = SECTIONS   # which engine sections run besides the scenarios
 
     def options_for(self) -> dict:
         return {spec: dict(opts) for spec, opts in self.engine_options}
@@ -181,29 +184,33 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
     if opts.models:   # the engine sections are about the thesis and benchmark bicycles
         return tasks
     quick = opts.quick
-    if "pinocchio" in opts.engines:
+    want = set(opts.sections)
+    if "pinocchio" in opts.engines and "terms" in want:
         n = 50 if quick else 200
         tasks.append(Task("pinocchio-terms", engines.pinocchio_terms, (n,), 1.5,
                           "Pinocchio term by term"))
+    if "pinocchio" in opts.engines and "faults" in want:
         tasks.append(Task(("faults", "pinocchio"), faults.fault_entries, ("pinocchio",), 4.0,
                           "fault injection on Pinocchio"))
-    if "exudyn" in opts.engines:
+    if "exudyn" in opts.engines and "terms" in want:
         tasks.append(Task("exudyn-terms", engines.exudyn_terms, (20 if quick else 100,), 1.0,
                           "Exudyn tree term by term"))
+    if "exudyn" in opts.engines and "faults" in want:
+        tasks.append(Task(("faults", "exudyn"), faults.fault_entries, ("exudyn",), 3.0,
+                          "fault injection on Exudyn's tree"))
+    if "exudyn" in opts.engines and "exudyn" in want:
         for n in (engines.QUICK_FORWARD if quick else engines.FORWARD):
             tasks.append(Task(("exudyn-trajectory", n), engines.exudyn_trajectory, (n,),
                               6.0 if n == "replay" else 2.5, f"Exudyn trajectories: {n}"))
         tasks.append(Task("exudyn-convergence", engines.exudyn_convergence, (quick,),
                           5.0 if quick else 8.0, "Exudyn convergence order"))
         tasks.append(Task("energy", engines.energy_section, (), 2.0, "energy drift"))
-        tasks.append(Task(("faults", "exudyn"), faults.fault_entries, ("exudyn",), 3.0,
-                          "fault injection on Exudyn's tree"))
     for spec in opts.engines:
-        if spec not in ENGINE_NAMES:   # a plugin: its terms, where it declares them
+        if spec not in ENGINE_NAMES and "terms" in want:   # a plugin: its declared terms
             tasks.append(Task(("plugin-terms", spec), engines.plugin_terms,
                               (spec, opts.options_for().get(spec, {}), 50 if quick else 200), 1.5,
                               f"{spec} term by term"))
-    if "pinocchio" in opts.engines and "exudyn" in opts.engines:
+    if "pinocchio" in opts.engines and "exudyn" in opts.engines and "benchmark" in want:
         builds = benchmark.QUICK_BUILDS if quick else benchmark.BUILDS
         tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (quick,), 1.5,
                           "benchmark terms"))
@@ -364,6 +371,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "expected_differences": _expected_differences(names, cases),
         "environment": environment(setups),
         "quick": opts.quick,
+        "sections": list(opts.sections),
     }
     if opts.models or opts.scenario_files:
         summary["models"] = _models_used(opts, case_list)

@@ -58,7 +58,7 @@ def reference_rows(names, runs: dict, cases: dict | None = None
             checks.append(analytic_check(run, model))
         if run.trajectory is not None and "initial_correction" in run.trajectory.settings:
             corrections[name] = run.trajectory.settings["initial_correction"]
-        elif "re-solved" in run.message:   # an inverse run on another geometry
+        elif "beta corrected by" in run.message:   # an inverse run on another geometry
             corrections[name] = run.message.split("; ", 1)[1]
     return rows, checks, corrections
 
