@@ -137,9 +137,10 @@ def _progress_bar(total: int, enabled: bool):
 
 def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
               workers: int | None = None, processes: bool = True,
-              progress: bool = True) -> SweepResult:
+              progress: bool = True, client=None) -> SweepResult:
     """Compute every missing chunk of ``spec`` on Dask, then merge all rows into
-    ``results.parquet`` (module docstring)."""
+    ``results.parquet`` (module docstring). ``client``: an existing Dask client to use (and
+    leave open) instead of connecting to ``scheduler`` or starting a local cluster."""
     t0 = time.perf_counter()
     out = Path(out)
     h = spec_hash(spec)
@@ -151,7 +152,9 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
     task_seconds = 0.0
     if todo:
         from distributed import as_completed
-        client, cluster = _client(scheduler, workers, processes)
+        own = client is None
+        if own:
+            client, cluster = _client(scheduler, workers, processes)
         try:
             result.timings["workers"] = len(client.scheduler_info(n_workers=-1)["workers"])
             t_submit = time.perf_counter()
@@ -174,9 +177,10 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
                     fut.release()
             result.timings["compute_seconds"] = time.perf_counter() - t_submit
         finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            if own:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
     result.timings["task_seconds"] = task_seconds
     result.results = merge(spec, out, h, len(chunks))
     result.seconds = time.perf_counter() - t0

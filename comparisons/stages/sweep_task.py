@@ -12,7 +12,8 @@ not asked for or could not run):
 * ``vary.<name>`` for every varied name (the grid's value, or the sampled value), then
   ``trail``, ``head_angle``, ``wheelbase`` (derived, NaN without a benchmark counterpart) and
   ``p.<name>`` for the model's 30 parameters;
-* terms (``--checks terms``), per engine E and quantity Q both provide: ``err.E.Q`` (max error
+* terms (``--checks terms``), per engine E (its name, or the class name of a ``file.py:Class`` spec) and quantity Q
+  both provide: ``err.E.Q`` (max error
   normalised as its tolerance in `judgments/tolerances.toml`), ``entry.E.Q`` (worst entry and
   state, e.g. "M[theta, gamma] @ state 3"); ``max_error`` over all, ``terms_passed``;
   ``localization`` (for a bicycle that disagrees: the failing entries and `judgments.diagnose`'s
@@ -71,7 +72,7 @@ def columns(spec: SweepSpec) -> list[str]:
     if "terms" in spec.checks:
         for e, qs in quantities(spec).items():
             for q in qs:
-                cols += [f"err.{e}.{q}", f"entry.{e}.{q}"]
+                cols += [f"err.{label_of(e)}.{q}", f"entry.{label_of(e)}.{q}"]
         cols += ["max_error", "terms_passed", "localization"]
     if "eigen" in spec.checks:
         cols += ["weave_speed", "capsize_speed"]
@@ -81,6 +82,12 @@ def columns(spec: SweepSpec) -> list[str]:
         cols.append("runs_confirmed")
     cols.append("task_seconds")
     return cols
+
+
+def label_of(spec: str) -> str:
+    """An engine's name in the columns: its registered name or the class of a spec."""
+    from .runs import label_of as label
+    return label(spec)
 
 
 def _factors():
@@ -182,9 +189,9 @@ def _terms(spec: SweepSpec, model, row: dict, failures: list[str]) -> bool:
         try:
             engine = load_engine(e, model)
         except Exception as exc:      # noqa: BLE001 -- an engine a bicycle breaks is a row
-            failures.append(f"{e}: {_one_line(exc)}")
+            failures.append(f"{label_of(e)}: {_one_line(exc)}")
             continue
-        ok_engine = True
+        ok_engine, e = True, label_of(e)
         for q in (q for q in qs if engine.supports(q)):
             try:
                 c = compare_term(q, ref, engine, states, tols[q])
