@@ -72,8 +72,8 @@ def tiny(tmp_path_factory, benchmark_params, client):
     return spec, out, first
 
 
-def _usage(capsys, *argv) -> str:
-    assert main(["sweep", "--out", "unused-folder", *argv]) == 2
+def _usage(capsys, out, *argv) -> str:
+    assert main(["sweep", "--out", str(out), "--workers", "1", *argv]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1, err
     return err
@@ -91,8 +91,8 @@ def _usage(capsys, *argv) -> str:
     (["--model", "thesis", "--vary", "m3=80:90:3"], ["--checks eigen", "thesis-disc"]),
     (["--vary", "m3=80:90:3", "--checks", "terms,wobble"], ["--checks", "choose from"]),
 ])
-def test_bad_specs_are_one_line_naming_the_option(capsys, argv, words):
-    err = _usage(capsys, *argv)
+def test_bad_specs_are_one_line_naming_the_option(capsys, tmp_path, argv, words):
+    err = _usage(capsys, tmp_path / "out", *argv)
     for w in words:
         assert w in err, err
 
