@@ -18,9 +18,10 @@ Layout of ``out_dir``::
   flight, nothing else).
 * **Failures are rows**: an engine that raises on a bicycle is caught in the task
   (`sweep_task.bicycle_row`); a task that never returns (its worker died more often than
-  Dask's ``distributed.scheduler.allowed-failures`` retries, or any other exception) becomes
-  one "failed" row per bicycle of the chunk naming the exception. Delete that chunk's file to
-  compute it again.
+  Dask's ``distributed.scheduler.allowed-failures`` retries, or any other exception) is split
+  into one task per bicycle, and a bicycle whose own task is lost again becomes a "failed" row
+  naming the exception (the chunk's other bicycles keep their results). Delete that chunk's
+  file to compute it again.
 * **Deterministic**: bicycle k's parameters and states come from ``SeedSequence([seed, k])``,
   rows are sorted by index: the same spec gives the same rows (``task_seconds`` aside),
   whatever the number of workers or the order they finish in.
@@ -160,21 +161,35 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
             t_submit = time.perf_counter()
             futures = {client.submit(chunk_rows, spec, c, key=f"sweep-{h}-{i:06d}", pure=False): (i, c)
                        for i, c in todo}
+            done: dict[int, list[dict]] = {i: [] for i, _ in todo}    # rows so far per chunk
+            left = {i: 1 for i, _ in todo}                            # tasks outstanding
             with _progress_bar(sum(len(c) for _, c in todo), progress) as bar:
-                for fut in as_completed(futures):
-                    i, c = futures[fut]
+                ac = as_completed(futures)
+                for fut in ac:
+                    i, c = futures.pop(fut)
+                    left[i] -= 1
                     try:
-                        rows = fut.result()
+                        done[i] += fut.result()
                     except Exception as exc:     # noqa: BLE001 -- a lost task is a row per bicycle
-                        msg = f"task lost: {type(exc).__name__}: {' '.join(str(exc).split())}"
-                        rows = [failed_row(spec, k, msg[:500]) for k in c]
                         result.failed_tasks += 1
-                    write_parquet(rows_frame(spec, rows), chunk_path(out, h, i))
-                    task_seconds += sum(r["task_seconds"] for r in rows
-                                        if math.isfinite(r["task_seconds"]))
-                    result.computed += 1
-                    bar.update(len(c))
+                        if len(c) > 1:           # isolate the bicycle(s) that lose the task
+                            for k in c:
+                                f = client.submit(chunk_rows, spec, (k,), pure=False,
+                                                  key=f"sweep-{h}-{i:06d}-{k}")
+                                futures[f] = (i, (k,))
+                                ac.add(f)
+                            left[i] += len(c)
+                        else:
+                            msg = f"task lost: {type(exc).__name__}: {' '.join(str(exc).split())}"
+                            done[i] += [failed_row(spec, k, msg[:500]) for k in c]
                     fut.release()
+                    if left[i] == 0:
+                        rows = done.pop(i)
+                        write_parquet(rows_frame(spec, rows), chunk_path(out, h, i))
+                        task_seconds += sum(r["task_seconds"] for r in rows
+                                            if math.isfinite(r["task_seconds"]))
+                        result.computed += 1
+                        bar.update(len(rows))
             result.timings["compute_seconds"] = time.perf_counter() - t_submit
         finally:
             if own:
