@@ -16,7 +16,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .errors import EXIT_FAIL, EXIT_OK, UsageError
+from .errors import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, UsageError
 
 MAX_WORKERS = 1024
 
@@ -91,6 +91,14 @@ def cmd_sweep(args) -> int:
     try:
         result = run_sweep(spec, args.out, scheduler=args.scheduler, workers=args.workers,
                            progress=not args.no_progress)
+    except KeyboardInterrupt as exc:      # Ctrl-C or SIGTERM: the finished chunks stay
+        from ..stages.pool import Terminated
+        from ..stages.sweep_spec import spec_hash
+        what = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        print(f"bicycle-xval: {what}; the finished chunks are kept in "
+              f"{args.out / 'chunks' / spec_hash(spec)}: rerun the same command to resume",
+              file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     except OSError as exc:
         if args.scheduler and not isinstance(exc, (FileNotFoundError, PermissionError)):
             raise UsageError(f"--scheduler {args.scheduler}: cannot connect ({exc}); start one "
