@@ -11,6 +11,9 @@
     bicycle-xval import FILE --from benchmark --out my.toml [--name NAME]
                         [--allow-triangle-violation]
     bicycle-xval export --model NAME|FILE --format benchmark --out PATH
+    bicycle-xval sweep --model NAME|FILE --vary NAME=LOW:HIGH:N ... | --sample N --spread P
+                       [--seed S] [--engines ...] [--checks terms,eigen,runs] --out DIR
+                       [--scheduler ADDRESS | --workers N]
 
 Exit status: 0 success, 1 a run failed (solver failure) or a check did not hold,
 2 usage error (bad option, unknown model or scenario, bad parameter file), always with a
@@ -304,6 +307,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_eigenvalues_parser(sub)
     add_import_parser(sub)
     add_export_parser(sub)
+    __import__("comparisons.cli.sweep", fromlist=["x"]).add_sweep_parser(sub)
     return p
 
 
