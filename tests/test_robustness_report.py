@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from comparisons.cli import main
-from comparisons.report.files import MANIFEST, ReportFolder, write_text
+from comparisons.stages.files import MANIFEST, ReportFolder, write_text
 
 TINY = ["run", "--quick", "--scenarios", "check", "--engines", "reference"]
 ROOT = Path(__file__).resolve().parents[1]

@@ -22,7 +22,7 @@ import numpy as np
 from engines.runs import Run
 from reference_model import COORDINATES, TORQUE_NAMES
 
-from ..report.files import write_text
+from ..stages.files import write_text
 from .errors import EXIT_FAIL, EXIT_OK, UsageError
 
 STATE_COLUMNS = ("t",) + COORDINATES + tuple(f"d_{c}" for c in COORDINATES)

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from ..judgments.diagnose import DEFAULT_STATES, diagnose
-from ..report.files import write_text
+from ..stages.files import write_text
 from .errors import EXIT_FAIL, EXIT_OK, UsageError
 
 MAX_STATES = 2000

@@ -101,7 +101,7 @@ def run_eigenvalues(args) -> int:
         lin = linearize(model, float(speeds[0]))
     except LinearizationError as exc:
         raise UsageError(f"--model {args.model}: {exc}") from None
-    from ..report.files import write_csv
+    from ..stages.files import write_csv
     frame = eigenvalue_table(model, speeds)
     write_csv(frame, args.out)
     print(f"eigenvalues of {model.name} ({model.contact} contact, frame pitch at upright "

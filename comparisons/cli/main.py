@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..report import frames
-from ..report.files import write_csv
+from ..stages.files import write_csv
 from .errors import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE, UsageError
 
 

@@ -335,7 +335,7 @@ def draw_png(kind: str, data: dict) -> bytes:
 
 def save_figure(kind: str, data: dict, path: Path) -> Path:
     """Draw figure ``kind`` from ``data`` and write it to ``path`` (PNG, atomically)."""
-    from .files import write_bytes
+    from ..stages.files import write_bytes
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise ValueError(f"figure file {path} must end in .png (the figures are PNG images)")

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .figures import _plain_log, _plt, png_bytes
-from .files import write_bytes, write_text
+from ..stages.files import write_bytes, write_text
 
 MAX_LISTED = 200      # disagreeing bicycles listed in report.md (all are in results.parquet)
 

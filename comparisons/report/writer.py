@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from . import figures, frames, markdown
-from .files import ReportFolder, write_bytes, write_csv, write_text
+from ..stages.files import ReportFolder, write_bytes, write_csv, write_text
 from .html import write_html
 
 

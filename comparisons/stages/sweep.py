@@ -13,7 +13,7 @@ Layout of ``out_dir``::
   (1-10 s, from `COST`: per-bicycle seconds measured on the 2-core development machine), a
   pure function of the spec: the chunking is part of what the hash fixes.
 * **Atomic and resumable**: each chunk file is written to a temporary name and renamed when
-  complete (`report.files.atomic_path`); a rerun with the same spec finds the files under the
+  complete (`files.atomic_path`); a rerun with the same spec finds the files under the
   same hash and computes only the missing chunks (an interrupted sweep loses the chunks in
   flight, nothing else).
 * **Failures are rows**: an engine that raises on a bicycle is caught in the task
@@ -37,7 +37,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..report.files import atomic_path, write_text
+from .files import atomic_path, write_text
 from .sweep_spec import SweepSpec, spec_hash
 from .sweep_task import chunk_rows, columns, failed_row
 

@@ -1,4 +1,5 @@
-"""Files the harness writes, written so that none is ever left half-written.
+"""Files the harness writes, written so that none is ever left half-written (used by the
+stages that keep checkpoints, the sweep, and by the report writer).
 
 Every file goes to a temporary name in its own folder and is renamed over the target only when
 complete (``os.replace`` is atomic on one file system); text is always UTF-8, whatever the
