@@ -16,13 +16,18 @@ from engines import CAPABILITIES, CapabilityError, Engine, EngineError, load_eng
 from reference_model import load_model
 from reference_model.scenarios import SCENARIOS, run_inverse
 
-MODELS = ("thesis", "thesis-disc")
+# the named models, and `general` (tests/conftest.py): unequal wheels, an off-axis fork CoM,
+# every inertia entry distinct, so a swapped key or a wrong frame shows in M (the named models'
+# axisymmetric wheels and on-axis fork hide e.g. I5xx <-> I5zz)
+MODELS = ("thesis", "thesis-disc", "general")
 OTHER_ENGINES = ("pinocchio",)
 TOLERANCES = load_tolerances()
 
 
 @pytest.fixture(scope="module", params=MODELS)
 def model(request):
+    if request.param == "general":
+        return request.getfixturevalue("general")   # session fixture, built once
     return load_model(request.param)
 
 
@@ -63,6 +68,27 @@ def test_term_matches_reference_on_a_sweep(pair, quantity):
     """The same over 200 deterministic states (reproducible numbers for the notes)."""
     res = compare_term(quantity, *pair, random_states(200, seed=7), TOLERANCES[quantity])
     assert res.passed, res.describe()
+
+
+@pytest.mark.parametrize("quantity", QUANTITIES)
+def test_general_bicycle_with_disc_contact_matches_reference(general_disc, quantity):
+    """The general bicycle with the other front contact (R_front enters the disc contact's
+    point differently): the full term set on the deterministic sweep."""
+    ref, other = load_engine("reference", general_disc), load_engine("pinocchio", general_disc)
+    res = compare_term(quantity, ref, other, random_states(200, seed=7), TOLERANCES[quantity])
+    assert res.passed, res.describe()
+
+
+def test_general_bicycle_is_general(general):
+    """The model the conformance runs on really has what it is there for (else the tests above
+    would silently lose their power): distinct inertia entries, unequal wheels, an off-axis
+    fork CoM."""
+    p = general.params
+    for body in (2, 3, 4, 5):
+        I = p.inertia(body)
+        entries = [I[0, 0], I[1, 1], I[2, 2]] + ([I[0, 2]] if body in (3, 4) else [])
+        assert len(set(entries)) == len(entries) and all(entries), (body, entries)
+    assert p.R_rear != p.R_front and p.dx4 != 0 and p.dz4 != 0 and p.za + p.z5 != 0
 
 
 def test_pinocchio_mass_matrix_from_rnea_columns(model):
