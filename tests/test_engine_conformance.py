@@ -193,16 +193,44 @@ def test_missing_capability_names_engine_and_capability(model):
 
 @pytest.mark.parametrize("name", ("reference", "pinocchio"))
 def test_declared_capabilities_are_implemented(model, name):
+    """Every declared capability answers with the documented shape and the value of the
+    reference model's own function (within the term's tolerance, tolerances.toml); every
+    capability not declared raises CapabilityError naming it. A stub that returns zeros, the
+    wrong term or the wrong shape fails here, not only one that raises."""
+    import dataclasses
     eng = load_engine(name, model)
     assert set(eng.capabilities) <= set(CAPABILITIES)
     s = random_states(2, seed=5)
-    for cap in eng.capabilities - {"simulate"}:
-        out = {"mass_matrix": lambda: eng.mass_matrix(s.q[0]),
-               "inverse_dynamics": lambda: eng.inverse_dynamics(s.q[0], s.dq[0], s.ddq[0]),
-               "gravity": lambda: eng.gravity(s.q[0]),
-               "generalized_forces": lambda: eng.generalized_forces(s.q[0], s.dq[0], s.T[0]),
-               "constraint_jacobian": lambda: eng.constraint_jacobian(s.q[0]),
-               "constraint_bias": lambda: eng.constraint_bias(s.q[0], s.dq[0]),
-               "forward_acceleration": lambda: eng.forward_acceleration(s.q[0], s.dq[0], s.T[0]),
-               }[cap]()
-        assert np.all(np.isfinite(out))
+    q, dq, ddq, T = s.q[0], s.dq[0], s.ddq[0], s.T[0]
+    calls = {
+        "mass_matrix": (lambda e: e.mass_matrix(q), model.mass_matrix(q)),
+        "inverse_dynamics": (lambda e: e.inverse_dynamics(q, dq, ddq),
+                             model.inverse_dynamics(q, dq, ddq)),
+        "gravity": (lambda e: e.gravity(q), model.Qgrav(q)),
+        "generalized_forces": (lambda e: e.generalized_forces(q, dq, T),
+                               model.generalized_forces(q, dq, T)),
+        "constraint_jacobian": (lambda e: e.constraint_jacobian(q), model.constraint_jacobian(q)),
+        "constraint_bias": (lambda e: e.constraint_bias(q, dq), model.constraint_bias(q, dq)),
+        "forward_acceleration": (lambda e: e.forward_acceleration(q, dq, T),
+                                 model.forward_acceleration(q, dq, T)),
+    }
+    assert set(calls) | {"simulate"} == set(CAPABILITIES)
+    for cap, (call, expected) in calls.items():
+        if cap not in eng.capabilities:
+            with pytest.raises(CapabilityError, match=cap):
+                call(eng)
+            continue
+        out = np.asarray(call(eng))
+        assert out.shape == expected.shape, (cap, out.shape)
+        tol = TOLERANCES[cap]
+        err = np.abs(out - expected).max() / tol.normalizer(expected)
+        assert err <= tol.tolerance, f"{cap}: {err:.2e} > {tol.tolerance:.0e}"
+    if "simulate" in eng.capabilities:
+        # 0.1 s of the check's straight rolling: xc = R_rear psi_dot t exactly (steady state,
+        # tests/test_solvers.py); DOP853 at rtol 1e-10 over 0.5 m: 1e-9 m
+        sc = SCENARIOS["check-forward"]
+        traj = eng.simulate(dataclasses.replace(sc, grid=(0.0, 0.01, 11)))
+        assert traj.status == "completed", traj.message
+        np.testing.assert_allclose(traj.t, 0.01 * np.arange(11), rtol=0, atol=1e-15)
+        v = model.params.R_rear * sc.dq_ind0[1]
+        np.testing.assert_allclose(traj.q[:, 0], v * traj.t, rtol=0, atol=1e-9)
