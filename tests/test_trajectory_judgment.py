@@ -10,7 +10,8 @@ No engine runs.
 import numpy as np
 import pytest
 
-from comparisons.convergence import Horizon, error_vs_time, meaningful_horizon
+from comparisons.convergence import (Horizon, _verdict, error_vs_time, fit_order,
+                                     meaningful_horizon)
 from comparisons.scenario_compare import compare_forward, trajectory_error
 from comparisons.scenario_runs import Run
 from comparisons.tolerances import load_tolerances
@@ -30,10 +31,12 @@ def _motion(t):
     return q
 
 
-def make_run(engine="reference", t_end=2.0, part_at=None, size=1e-2, coord=THETA, fall=None):
-    """A run of _motion on the grid to t_end; from ``part_at`` on, ``coord`` is off by
-    ``size``; ``fall`` adds an event row off the grid at that time (status 'fell')."""
-    t = np.round(np.arange(0.0, t_end + DT / 2, DT), 10)
+def make_run(engine="reference", t_end=2.0, part_at=None, size=1e-2, coord=THETA, fall=None,
+             t0=0.0):
+    """A run of _motion on the grid t0, t0 + 0.01, ... to t_end; from ``part_at`` on,
+    ``coord`` is off by ``size``; ``fall`` adds an event row off the grid at that time
+    (status 'fell')."""
+    t = np.round(np.arange(t0, t_end + DT / 2, DT), 10)
     if fall is not None:
         t = np.append(t[t < fall], fall)
     q = _motion(t)
@@ -88,6 +91,12 @@ def test_runs_parting_only_after_the_horizon_pass(part_at):
     assert c["passed"] is True and c["max_error"] == 0.0, c
     assert c["horizon"] == 1.0 and c["horizon_reason"] == "test horizon at 1.0 s"
     assert c["tolerance"] == TRAJ_TOL
+    # the summary.json contract of a comparison entry
+    assert {"quantity", "scenario", "model", "engines", "max_error", "tolerance", "passed",
+            "localized_to", "horizon", "horizon_reason", "note"} <= set(c)
+    assert (c["quantity"], c["scenario"], c["model"]) == ("trajectory", "stability-psid10",
+                                                          "thesis")
+    assert c["engines"] == ["reference", "pinocchio"] and "judged" in c["note"]
     assert te.t[-1] == pytest.approx(1.0)
 
 
@@ -112,6 +121,7 @@ def test_fixed_step_engine_is_reported_not_judged():
     (c,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS)
     assert c["passed"] is None and c["tolerance"] is None
     assert c["max_error"] == pytest.approx(1e-3)
+    assert "convergence order" in c["note"]
 
 
 # -- meaningful_horizon: where two runs part ------------------------------------------------------
@@ -120,8 +130,37 @@ def test_horizon_is_the_grid_time_before_the_runs_part():
     twin = make_run(part_at=0.73, size=2e-6)
     h = meaningful_horizon(make_run(), twin)
     assert h.limited_by == "separation" and h.t == pytest.approx(0.72)
-    assert h.separation_at_t == 0.0
-    assert "0.73 s" in h.reason
+    assert h.separation_at_t == 0.0 and h.threshold == 1e-6
+    assert h.end_times == (pytest.approx(2.0), pytest.approx(2.0))
+    assert "0.73 s" in h.reason and "theta, gamma, xc, yc" in h.reason
+
+
+def test_runs_already_apart_at_the_start_have_no_horizon_beyond_it():
+    h = meaningful_horizon(make_run(), make_run(part_at=0.0, size=3e-6))
+    assert h.limited_by == "separation" and h.t == 0.0
+    assert h.separation_at_t == pytest.approx(3e-6) and h.threshold == 1e-6
+    assert h.end_times == (pytest.approx(2.0), pytest.approx(2.0))
+    assert "at the start" in h.reason
+
+
+def test_horizon_watches_only_the_given_coordinates_at_the_given_threshold():
+    twin = make_run(part_at=0.5, size=2e-6)           # theta parts at 0.5 s
+    assert meaningful_horizon(make_run(), twin, coords=("gamma",)).limited_by == "end"
+    assert meaningful_horizon(make_run(), twin, threshold=1e-5).limited_by == "end"
+    with pytest.raises(ValueError, match="threshold must be positive"):
+        meaningful_horizon(make_run(), twin, threshold=0.0)
+
+
+def test_grids_need_not_start_at_zero():
+    """Runs on 1.00, 1.01, ... s (and an event row at 1.234 s) are matched on that grid."""
+    ref = make_run(t0=1.0)
+    other = make_run(t0=1.0, fall=1.234, part_at=1.1, size=1e-3)
+    err = error_vs_time(ref, other, coords=("theta",))
+    np.testing.assert_allclose(err["t"], 1.0 + 0.01 * np.arange(24), rtol=0, atol=1e-12)
+    assert err["theta"][:10].max() == 0.0 and err["theta"][10:].min() == pytest.approx(1e-3)
+    # a reference of two samples still defines the grid
+    two = make_run(t_end=0.01)
+    assert error_vs_time(two, make_run(), coords=("theta",))["t"].size == 2
 
 
 def test_horizon_ignores_coordinates_it_does_not_compare_and_tiny_differences():
@@ -138,3 +177,34 @@ def test_horizon_ends_at_the_shorter_run():
     h = meaningful_horizon(make_run(), make_run(fall=1.234))
     assert h.limited_by == "end" and h.t == pytest.approx(1.23)
     assert h.end_times == (pytest.approx(2.0), pytest.approx(1.234))
+
+
+# -- the convergence verdict's rules (the part of a convergence study that needs no engine) ----
+
+def test_fit_order_with_two_steps_and_with_a_zero_error():
+    assert fit_order([2e-3, 1e-3], [4e-6, 1e-6]) == (pytest.approx(2.0), pytest.approx(0.0,
+                                                                                    abs=1e-9))
+    assert np.isnan(fit_order([2e-3], [4e-6])[0])                   # one point: no line
+    assert np.isnan(fit_order([2e-3, 1e-3], [4e-6, 0.0])[0])        # log(0)
+    assert np.isnan(fit_order([2e-3, 1e-3], [4e-6, np.inf])[1])
+
+
+@pytest.mark.parametrize("steps, verdict", [
+    ((4e-3, 2e-3, 1e-3, 5e-4), "converges"),   # 4 steps over 8x
+    ((4e-3, 1e-3, 5e-4), "converges"),         # 3 steps over 8x: enough
+    ((2e-3, 1e-3, 5e-4), "inconclusive"),      # 3 steps over only 4x
+    ((4e-3, 5e-4), "inconclusive"),            # 8x but 2 steps
+])
+def test_verdict_needs_three_steps_over_eightfold(steps, verdict):
+    h = np.array(steps)
+    e = 40.0 * h ** 2
+    got, why = _verdict(h, e, fit_order(h, e)[0])
+    assert got == verdict, why
+
+
+def test_model_difference_reports_the_error_ratio():
+    h = np.array([4e-3, 2e-3, 1e-3, 5e-4])
+    e = np.array([0.052, 0.051, 0.0505, 0.05])
+    got, why = _verdict(h, e, fit_order(h, e)[0])
+    assert got == "model difference"
+    assert "= 1.04 over 8x" in why and "5.00e-02" in why
