@@ -130,3 +130,19 @@ def test_random_states_are_deterministic_and_in_range():
     assert np.abs(a.q[:, 3]).max() <= 1.2 and np.abs(a.q[:, 6]).max() <= 1.55
     assert np.abs(a.dq).max() <= 20 and np.abs(a.T).max() <= 10
     assert not np.array_equal(random_states(50, seed=10).q, a.q)
+
+
+def test_compare_terms_skips_what_one_engine_lacks(thesis):
+    """An engine providing only M (like Exudyn's tree) is compared on M alone, not asked for
+    the rest (which would raise CapabilityError)."""
+    from engines import Engine
+
+    class OnlyM(Engine):
+        name = "only-m"
+        capabilities = frozenset({"mass_matrix"})
+
+        def mass_matrix(self, q):
+            return self.model.mass_matrix(q)
+
+    results = compare_terms(load_engine("reference", thesis), OnlyM(thesis), STATES)
+    assert [r.quantity for r in results] == ["mass_matrix"] and results[0].passed
