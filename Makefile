@@ -9,7 +9,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 STAMP = $(VENV)/.installed
 
-.PHONY: venv test report example bench clean
+.PHONY: venv test report example bench clean mutants
 
 venv: $(STAMP)
 
@@ -32,6 +32,29 @@ example: $(STAMP)  ## the committed example report: markdown, figures, summary.j
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/run.py
 
+# Mutation testing of the judgment and solver modules (not part of `make test`): mutmut, set
+# up in pyproject.toml [tool.mutmut] (which modules, which fast tests, and why mutmut). Each
+# run starts afresh (mutmut caches results and would not notice changed tests); it prints the
+# surviving mutants (`mutmut show NAME` shows one) and the score. MUTANTS narrows it, e.g.
+# make mutants MUTANTS='comparisons.claims*'. Two worker processes (the machine's cores).
+MUTATION_STAMP = $(VENV)/.installed-mutation
+MUTANTS ?=
+
+$(MUTATION_STAMP): pyproject.toml $(VENV)/bin/python
+	$(VENV)/bin/python -m pip install -e '.[test,mutation]'
+	touch $(MUTATION_STAMP)
+
+mutants: $(MUTATION_STAMP)
+	rm -rf mutants
+	$(VENV)/bin/mutmut run --max-children 2 $(MUTANTS) > mutants.log 2>&1 || (tail -20 mutants.log; exit 1)
+	$(VENV)/bin/mutmut results
+	$(VENV)/bin/mutmut export-cicd-stats > /dev/null
+	$(VENV)/bin/python -c "import json; s = json.load(open('mutants/mutmut-cicd-stats.json')); \
+	  tried = s['killed'] + s['survived'] + s['timeout'] + s['suspicious']; \
+	  print(f\"mutation score {s['killed'] + s['timeout']}/{tried} killed \" \
+	        f\"({100 * (s['killed'] + s['timeout']) / max(tried, 1):.1f} %), {s['survived']} survived, \" \
+	        f\"{s['no_tests']} not reached by the selected tests\")"
+
 clean:  ## build leftovers and the generated-code cache (regenerated on next use)
-	rm -rf .cache build dist *.egg-info
+	rm -rf .cache build dist *.egg-info mutants mutants.log
 	rm -rf "$${BICYCLE_XVAL_CACHE:-$${XDG_CACHE_HOME:-$$HOME/.cache}/bicycle-xval}"

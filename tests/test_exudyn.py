@@ -57,6 +57,21 @@ def test_tree_mass_matrix_equals_reference(thesis):
     np.testing.assert_array_equal(eng.mass_matrix(q[0]), M[0])
 
 
+def test_tree_terms_equal_reference_on_a_general_bicycle(general_disc):
+    """M and the generalized forces of the tree on the general bicycle (tests/conftest.py:
+    every inertia entry distinct, unequal wheels, fork CoM off the axis), where a swapped
+    inertia key or a wrong body frame cannot hide behind a symmetry. Round-off only, as
+    above: 1e-12 relative."""
+    eng = load_engine("exudyn", general_disc, build="tree")
+    q, dq, T = _random_states(10, seed=15)
+    M, M_ref = eng.mass_matrix(q), general_disc.mass_matrix(q)
+    rel = np.abs(M - M_ref).max(axis=(1, 2)) / np.abs(M_ref).max(axis=(1, 2))
+    assert rel.max() < 1e-12, rel.max()
+    F, F_ref = eng.generalized_forces(q, dq, T), general_disc.generalized_forces(q, dq, T)
+    rel = np.abs(F - F_ref).max(axis=1) / np.abs(F_ref).max(axis=1)
+    assert rel.max() < 1e-12, rel.max()
+
+
 def test_tree_generalized_forces_equal_reference(disc):
     # Qv + Qgrav + Qaero + S T from Exudyn's right-hand side with the run's loads (single-sided
     # body-fixed torques, drag connector): checks the loads' signs and bodies term by term;

@@ -1,0 +1,86 @@
+"""comparisons/tolerances.py: the tolerance file's validation and the error scales.
+
+Every malformed entry must be refused with a message naming the file, the quantity and the
+field; each scale divides an absolute error by what its name says (values by hand).
+"""
+
+import numpy as np
+import pytest
+
+from comparisons.tolerances import (TOLERANCES_ENV, TOLERANCES_FILE, Tolerance, ToleranceError,
+                                    load_tolerances)
+
+GOOD = 'tolerance = 1e-6\nscale = "absolute"\nreason = "why"\n'
+
+
+def _load(tmp_path, text):
+    path = tmp_path / "tol.toml"
+    path.write_text(text)
+    return load_tolerances(path), path
+
+
+def test_shipped_file_loads_with_reasons():
+    tols = load_tolerances()
+    assert {"mass_matrix", "trajectory", "constraint_residual", "torques"} <= set(tols)
+    for name, t in tols.items():
+        assert t.quantity == name and 0 < t.tolerance < 1 and t.reason.strip()
+
+
+def test_a_good_entry_is_read_exactly(tmp_path):
+    tols, _ = _load(tmp_path, "[trajectory]\n" + GOOD)
+    assert tols == {"trajectory": Tolerance("trajectory", 1e-6, "absolute", "why")}
+    assert isinstance(tols["trajectory"].tolerance, float)
+
+
+def test_environment_variable_selects_the_file(tmp_path, monkeypatch):
+    path = tmp_path / "env.toml"
+    path.write_text("[x]\n" + GOOD)
+    monkeypatch.setenv(TOLERANCES_ENV, str(path))
+    assert set(load_tolerances()) == {"x"}
+    monkeypatch.delenv(TOLERANCES_ENV)
+    assert set(load_tolerances()) == set(load_tolerances(TOLERANCES_FILE))
+
+
+ENTRY = "[x]\n" + GOOD
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("[x\n", "tol.toml: "),                                                 # TOML syntax
+    ("x = 3\n", "[x] must be a table"),
+    ('[x]\ntolerance = 1e-6\nscale = "absolute"\n', "[x] lacks reason"),
+    ('[x]\nscale = "absolute"\n', "[x] lacks reason, tolerance"),
+    (ENTRY.replace("1e-6", "0"), "x.tolerance must be a number in (0, 1); got 0"),
+    (ENTRY.replace("1e-6", "1"), "x.tolerance must be a number in (0, 1); got 1"),
+    (ENTRY.replace("1e-6", "-1e-3"), "got -0.001"),
+    (ENTRY.replace("1e-6", "true"), "got True"),
+    (ENTRY.replace("1e-6", '"1e-6"'), "got '1e-6'"),
+    (ENTRY.replace('"absolute"', '"relative"'), "x.scale must be one of"),
+    (ENTRY.replace('"why"', '"  "'), "x.reason is empty"),
+])
+def test_malformed_entry_is_named(tmp_path, text, fragment):
+    with pytest.raises(ToleranceError) as info:
+        _load(tmp_path, text)
+    message = str(info.value)
+    assert fragment in message and "tol.toml" in message and "\n" not in message, message
+
+
+def test_tolerance_just_inside_the_bounds_is_accepted(tmp_path):
+    for value in ("1e-300", "0.999999"):
+        tols, _ = _load(tmp_path, ENTRY.replace("1e-6", value))
+        assert tols["x"].tolerance == float(value)
+
+
+@pytest.mark.parametrize("scale, reference, terms, expected", [
+    ("absolute", [3.0, -7.0], None, 1.0),
+    ("max_abs", [3.0, -7.0], None, 7.0),
+    ("max_abs", [0.0, 0.0], None, 1.0),           # nothing to be relative to: absolute
+    ("max_abs", [0.2, -0.5], None, 0.5),          # small values are not rounded up
+    ("max_abs_or_one", [0.2, -0.5], None, 1.0),
+    ("max_abs_or_one", [3.0, -7.0], None, 7.0),
+    ("largest_term", [0.5], [[2.0, -30.0], [4.0]], 30.0),
+    ("largest_term", [0.5], [[0.2], [-0.4]], 1.0),
+    ("largest_term", [-12.0, 3.0], None, 12.0),   # no terms given: the reference itself
+])
+def test_normalizer(scale, reference, terms, expected):
+    t = Tolerance("x", 1e-6, scale, "why")
+    assert t.normalizer(np.array(reference), terms) == expected

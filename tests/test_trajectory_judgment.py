@@ -1,0 +1,210 @@
+"""Trajectory comparisons up to the meaningful horizon, on hand-made runs.
+
+comparisons/convergence.py `error_vs_time` and `meaningful_horizon`, comparisons/
+scenario_compare.py `trajectory_error` and `compare_forward`: synthetic `Run`s on the 0.01 s
+output grid whose differences are placed exactly (before or after a horizon, on or off the
+grid), so each expected number is known by construction of the input, not read from the code.
+No engine runs.
+"""
+
+import numpy as np
+import pytest
+
+from comparisons.convergence import (Horizon, _verdict, error_vs_time, fit_order,
+                                     meaningful_horizon)
+from comparisons.scenario_compare import compare_forward, trajectory_error
+from comparisons.scenario_runs import Run
+from comparisons.tolerances import load_tolerances
+
+DT = 0.01
+THETA, GAMMA, YC = 3, 6, 1
+TOLS = load_tolerances()
+TRAJ_TOL = TOLS["trajectory"].tolerance      # 1e-6 absolute (rad or m), see tolerances.toml
+
+
+def _motion(t):
+    """A smooth reference motion (its values do not matter: only differences are judged)."""
+    q = np.zeros((t.size, 8))
+    q[:, 0] = 1.6 * t
+    q[:, THETA] = 0.2 * np.sin(2 * t)
+    q[:, GAMMA] = 0.1 * np.sin(3 * t)
+    return q
+
+
+def make_run(engine="reference", t_end=2.0, part_at=None, size=1e-2, coord=THETA, fall=None,
+             t0=0.0):
+    """A run of _motion on the grid t0, t0 + 0.01, ... to t_end; from ``part_at`` on,
+    ``coord`` is off by ``size``; ``fall`` adds an event row off the grid at that time
+    (status 'fell')."""
+    t = np.round(np.arange(t0, t_end + DT / 2, DT), 10)
+    if fall is not None:
+        t = np.append(t[t < fall], fall)
+    q = _motion(t)
+    if part_at is not None:
+        q[t >= part_at - 1e-12, coord] += size
+    return Run(engine, "stability-psid10", "thesis", "forward",
+               "fell" if fall is not None else "completed", "", 0.0, t, q, np.zeros_like(q))
+
+
+def horizon(t):
+    return Horizon(t, "separation", 1e-6, 0.0, (2.0, 2.0), f"test horizon at {t} s")
+
+
+# -- error_vs_time and trajectory_error: cut at the horizon ---------------------------------
+
+def test_error_vs_time_stops_at_the_horizon():
+    ref, other = make_run(), make_run(part_at=1.5)
+    err = error_vs_time(ref, other, coords=("theta",), horizon=1.0)
+    assert err["t"][-1] == pytest.approx(1.0) and err["t"].size == 101
+    assert err["theta"].max() == 0.0       # identical up to 1.0 s
+    full = error_vs_time(ref, other, coords=("theta",))
+    assert full["t"][-1] == pytest.approx(2.0)
+    assert full["theta"].max() == pytest.approx(1e-2)   # the parting after the horizon
+
+
+def test_event_rows_off_the_grid_are_not_compared():
+    """A fall at 1.234 s ends the run with a row off the grid; only grid times are matched."""
+    ref, other = make_run(), make_run(fall=1.234, part_at=1.234, size=1.0)
+    err = error_vs_time(ref, other, coords=("theta",))
+    assert err["t"][-1] == pytest.approx(1.23)
+    assert err["theta"].max() == 0.0
+
+
+def test_trajectory_error_names_the_first_coordinate_past_the_threshold():
+    ref, other = make_run(), make_run(part_at=0.5, size=3e-6, coord=GAMMA)
+    te = trajectory_error(ref, other, horizon=1.0)
+    assert te.first == "gamma at 0.50 s"
+    assert te.worst == pytest.approx(3e-6) and te.worst_coordinate == "gamma"
+    assert te.t[-1] == pytest.approx(1.0)
+    same = trajectory_error(ref, make_run(part_at=1.5), horizon=1.0)
+    assert same.first == "-" and same.worst == 0.0
+
+
+# -- compare_forward: the judged comparison (same integrator: Pinocchio) ------------------------
+
+@pytest.mark.parametrize("part_at", [1.01, 1.5])   # the first grid time after it, and later
+def test_runs_parting_only_after_the_horizon_pass(part_at):
+    """Pinocchio parts from the reference by 1 cm after the 1.0 s horizon: past the horizon
+    the reference itself is not reproducible, so this must not count."""
+    ref, other = make_run(), make_run("pinocchio", part_at=part_at)
+    (c,), te = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert c["passed"] is True and c["max_error"] == 0.0, c
+    assert c["horizon"] == 1.0 and c["horizon_reason"] == "test horizon at 1.0 s"
+    assert c["tolerance"] == TRAJ_TOL
+    # the summary.json contract of a comparison entry
+    assert {"quantity", "scenario", "model", "engines", "max_error", "tolerance", "passed",
+            "localized_to", "horizon", "horizon_reason", "note"} <= set(c)
+    assert (c["quantity"], c["scenario"], c["model"]) == ("trajectory", "stability-psid10",
+                                                          "thesis")
+    assert c["engines"] == ["reference", "pinocchio"] and "judged" in c["note"]
+    assert te.t[-1] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("part_at", [0.3, 1.0])   # well inside, and at the horizon itself
+def test_runs_parting_before_the_horizon_fail_and_say_where(part_at):
+    ref, other = make_run(), make_run("pinocchio", part_at=part_at, size=1e-4, coord=YC)
+    (c,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert c["passed"] is False and c["max_error"] == pytest.approx(1e-4), c
+    assert c["localized_to"] == f"first past 1e-6: yc at {part_at:.2f} s; largest: yc"
+
+
+def test_difference_below_the_tolerance_passes():
+    """Within the horizon but below 1e-6: numerics, not a model difference."""
+    ref, other = make_run(), make_run("pinocchio", part_at=0.3, size=0.5 * TRAJ_TOL)
+    (c,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert c["passed"] is True and c["max_error"] == pytest.approx(0.5 * TRAJ_TOL)
+
+
+def test_fixed_step_engine_is_reported_not_judged():
+    """Exudyn's error is judged by its convergence order elsewhere: reported, passed None."""
+    ref, other = make_run(), make_run("exudyn-tree", part_at=0.3, size=1e-3)
+    (c,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert c["passed"] is None and c["tolerance"] is None
+    assert c["max_error"] == pytest.approx(1e-3)
+    assert "convergence order" in c["note"]
+
+
+# -- meaningful_horizon: where two runs part ------------------------------------------------------
+
+def test_horizon_is_the_grid_time_before_the_runs_part():
+    twin = make_run(part_at=0.73, size=2e-6)
+    h = meaningful_horizon(make_run(), twin)
+    assert h.limited_by == "separation" and h.t == pytest.approx(0.72)
+    assert h.separation_at_t == 0.0 and h.threshold == 1e-6
+    assert h.end_times == (pytest.approx(2.0), pytest.approx(2.0))
+    assert "0.73 s" in h.reason and "theta, gamma, xc, yc" in h.reason
+
+
+def test_runs_already_apart_at_the_start_have_no_horizon_beyond_it():
+    h = meaningful_horizon(make_run(), make_run(part_at=0.0, size=3e-6))
+    assert h.limited_by == "separation" and h.t == 0.0
+    assert h.separation_at_t == pytest.approx(3e-6) and h.threshold == 1e-6
+    assert h.end_times == (pytest.approx(2.0), pytest.approx(2.0))
+    assert "at the start" in h.reason
+
+
+def test_horizon_watches_only_the_given_coordinates_at_the_given_threshold():
+    twin = make_run(part_at=0.5, size=2e-6)           # theta parts at 0.5 s
+    assert meaningful_horizon(make_run(), twin, coords=("gamma",)).limited_by == "end"
+    assert meaningful_horizon(make_run(), twin, threshold=1e-5).limited_by == "end"
+    with pytest.raises(ValueError, match="threshold must be positive"):
+        meaningful_horizon(make_run(), twin, threshold=0.0)
+
+
+def test_grids_need_not_start_at_zero():
+    """Runs on 1.00, 1.01, ... s (and an event row at 1.234 s) are matched on that grid."""
+    ref = make_run(t0=1.0)
+    other = make_run(t0=1.0, fall=1.234, part_at=1.1, size=1e-3)
+    err = error_vs_time(ref, other, coords=("theta",))
+    np.testing.assert_allclose(err["t"], 1.0 + 0.01 * np.arange(24), rtol=0, atol=1e-12)
+    assert err["theta"][:10].max() == 0.0 and err["theta"][10:].min() == pytest.approx(1e-3)
+    # a reference of two samples still defines the grid
+    two = make_run(t_end=0.01)
+    assert error_vs_time(two, make_run(), coords=("theta",))["t"].size == 2
+
+
+def test_horizon_ignores_coordinates_it_does_not_compare_and_tiny_differences():
+    """The horizon watches theta, gamma, xc, yc (COMPARED) at 1e-6: a 1 mm change of the
+    frame pitch beta, or 5e-7 in theta, does not end it; then it is the end of the shorter run."""
+    twin = make_run(part_at=0.5, size=1e-3, coord=5)
+    twin.q[make_run().t >= 0.2, THETA] += 5e-7
+    h = meaningful_horizon(make_run(), twin)
+    assert h.limited_by == "end" and h.t == pytest.approx(2.0)
+    assert h.separation_at_t == pytest.approx(5e-7)
+
+
+def test_horizon_ends_at_the_shorter_run():
+    h = meaningful_horizon(make_run(), make_run(fall=1.234))
+    assert h.limited_by == "end" and h.t == pytest.approx(1.23)
+    assert h.end_times == (pytest.approx(2.0), pytest.approx(1.234))
+
+
+# -- the convergence verdict's rules (the part of a convergence study that needs no engine) ----
+
+def test_fit_order_with_two_steps_and_with_a_zero_error():
+    assert fit_order([2e-3, 1e-3], [4e-6, 1e-6]) == (pytest.approx(2.0), pytest.approx(0.0,
+                                                                                    abs=1e-9))
+    assert np.isnan(fit_order([2e-3], [4e-6])[0])                   # one point: no line
+    assert np.isnan(fit_order([2e-3, 1e-3], [4e-6, 0.0])[0])        # log(0)
+    assert np.isnan(fit_order([2e-3, 1e-3], [4e-6, np.inf])[1])
+
+
+@pytest.mark.parametrize("steps, verdict", [
+    ((4e-3, 2e-3, 1e-3, 5e-4), "converges"),   # 4 steps over 8x
+    ((4e-3, 1e-3, 5e-4), "converges"),         # 3 steps over 8x: enough
+    ((2e-3, 1e-3, 5e-4), "inconclusive"),      # 3 steps over only 4x
+    ((4e-3, 5e-4), "inconclusive"),            # 8x but 2 steps
+])
+def test_verdict_needs_three_steps_over_eightfold(steps, verdict):
+    h = np.array(steps)
+    e = 40.0 * h ** 2
+    got, why = _verdict(h, e, fit_order(h, e)[0])
+    assert got == verdict, why
+
+
+def test_model_difference_reports_the_error_ratio():
+    h = np.array([4e-3, 2e-3, 1e-3, 5e-4])
+    e = np.array([0.052, 0.051, 0.0505, 0.05])
+    got, why = _verdict(h, e, fit_order(h, e)[0])
+    assert got == "model difference"
+    assert "= 1.04 over 8x" in why and "5.00e-02" in why
