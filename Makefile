@@ -36,7 +36,7 @@ bench: $(STAMP)
 # up in pyproject.toml [tool.mutmut] (which modules, which fast tests, and why mutmut). Each
 # run starts afresh (mutmut caches results and would not notice changed tests); it prints the
 # surviving mutants (`mutmut show NAME` shows one) and the score. MUTANTS narrows it, e.g.
-# make mutants MUTANTS='comparisons.claims*'. Two worker processes (the machine's cores).
+# make mutants MUTANTS='comparisons.judgments.claims*'. Two worker processes (the machine's cores).
 MUTATION_STAMP = $(VENV)/.installed-mutation
 MUTANTS ?=
 

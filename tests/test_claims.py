@@ -12,9 +12,9 @@ import re
 import numpy as np
 import pytest
 
-from comparisons.claims import (CHECK_RELATIVE, CLAIMS, CONSTRAINT_ERROR, CRUISE_SPEED, DEPART,
+from comparisons.judgments.claims import (CHECK_RELATIVE, CLAIMS, CONSTRAINT_ERROR, CRUISE_SPEED, DEPART,
                                 QUICK_FALL, SOME_METRE, VERTICAL, judge_claims)
-from comparisons.scenario_runs import Run
+from engines.runs import Run
 
 VERDICTS = {"reproduced", "partly", "not reproduced", "not assessed"}
 JUDGE = {c.id: c.judge for c in CLAIMS}

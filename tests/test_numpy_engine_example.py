@@ -15,7 +15,7 @@ import pytest
 try:   # comparisons/ is being restructured: the judgments moved to comparisons.judgments
     from comparisons.judgments.terms import compare_terms, random_states
 except ImportError:
-    from comparisons.terms import compare_terms, random_states
+    from comparisons.judgments.terms import compare_terms, random_states
 from engines import EngineSpecError, available_engines, engine_info, load_engine
 from engines.registry import GROUP
 

@@ -8,8 +8,8 @@ entry, pass/fail against the tolerance) is known from the plant, not from the co
 import numpy as np
 import pytest
 
-from comparisons.terms import QUANTITIES, States, compare_term, compare_terms, random_states
-from comparisons.tolerances import Tolerance, load_tolerances
+from comparisons.judgments.terms import QUANTITIES, States, compare_term, compare_terms, random_states
+from comparisons.judgments.tolerances import Tolerance, load_tolerances
 from engines import load_engine
 from engines.reference import ReferenceEngine
 

@@ -7,7 +7,7 @@ field; each scale divides an absolute error by what its name says (values by han
 import numpy as np
 import pytest
 
-from comparisons.tolerances import (TOLERANCES_ENV, TOLERANCES_FILE, Tolerance, ToleranceError,
+from comparisons.judgments.tolerances import (TOLERANCES_ENV, TOLERANCES_FILE, Tolerance, ToleranceError,
                                     load_tolerances)
 
 GOOD = 'tolerance = 1e-6\nscale = "absolute"\nreason = "why"\n'

@@ -10,11 +10,11 @@ No engine runs.
 import numpy as np
 import pytest
 
-from comparisons.convergence import (Horizon, _verdict, error_vs_time, fit_order,
+from comparisons.judgments.convergence import (Horizon, _verdict, error_vs_time, fit_order,
                                      meaningful_horizon)
-from comparisons.scenario_compare import compare_forward, trajectory_error
-from comparisons.scenario_runs import Run
-from comparisons.tolerances import load_tolerances
+from comparisons.judgments.scenario_compare import compare_forward, trajectory_error
+from engines.runs import Run
+from comparisons.judgments.tolerances import load_tolerances
 
 DT = 0.01
 THETA, GAMMA, YC = 3, 6, 1

@@ -97,6 +97,11 @@ def compare_mass_matrix(scenario: str, model, states_q: np.ndarray, engines: dic
     return out
 
 
+def _short(x: float) -> str:
+    """1e-06 -> '1e-6' (as the report's text writes thresholds)."""
+    return f"{x:.0e}".replace("e-0", "e-").replace("e+0", "e+")
+
+
 #: how each kind of engine's trajectory is judged: with the reference's own integrator and
 #: tolerances ([trajectory]); with its own integrator, directly ([trajectory_conformance]); or
 #: reported here and judged by a convergence study (None)
@@ -119,8 +124,9 @@ def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols,
         "engines": [ref.engine, other.engine], "max_error": te.worst,
         "tolerance": tol.tolerance if tol else None,
         "passed": bool(te.worst <= tol.tolerance) if tol else None,
-        "localized_to": (f"first past {HORIZON_THRESHOLD:g}: {te.first}" if te.first != "-" else
-                         f"none past {HORIZON_THRESHOLD:g}") + f"; largest: {te.worst_coordinate}",
+        "localized_to": (f"first past {_short(HORIZON_THRESHOLD)}: {te.first}" if te.first != "-"
+                         else f"none past {_short(HORIZON_THRESHOLD)}")
+                        + f"; largest: {te.worst_coordinate}",
         "horizon": horizon.t, "horizon_reason": horizon.reason,
         "note": ("same integrator and formulation as the reference: judged" if same_solver else
                  f"its own integrator: judged by [{judged_by}]" if tol else
