@@ -21,7 +21,7 @@ $(STAMP): pyproject.toml $(VENV)/bin/python
 	touch $(STAMP)
 
 test: $(STAMP)
-	$(VENV)/bin/python -m pytest -n auto --dist loadgroup --durations=5
+	$(VENV)/bin/python -m pytest -n auto --durations=5
 
 report: $(STAMP)
 	$(VENV)/bin/bicycle-xval run --out reports/latest

@@ -31,11 +31,21 @@ def disc():
 
 @pytest.fixture(scope="session")
 def quick_report(tmp_path_factory):
-    """``bicycle-xval run --quick`` once: (output folder, exit status, summary.json)."""
+    """``bicycle-xval run --quick`` once per test session: (output folder, exit status,
+    summary.json). Under pytest-xdist the workers share it: the first to need it makes it while
+    holding a lock in the session's common temporary folder, the others read it."""
+    import fcntl
+    import os
+
     from comparisons.cli import main
-    out = tmp_path_factory.mktemp("quick-report")
-    code = main(["run", "--quick", "--out", str(out)])
-    return out, code, json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    base = tmp_path_factory.getbasetemp()
+    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    out, status = root / "quick-report", root / "quick-report.exit-status"
+    with open(root / "quick-report.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not status.exists():
+            status.write_text(str(main(["run", "--quick", "--out", str(out)])))
+    return out, int(status.read_text()), json.loads((out / "summary.json").read_text(encoding="utf-8"))
 
 
 @pytest.fixture(scope="session")

@@ -29,9 +29,6 @@ from reference_model import load_model
 from reference_model.model import DEP, IND
 from reference_model.scenarios import SCENARIOS
 
-# the session's quick report (tests/conftest.py) is made once per pytest-xdist worker: these
-# modules share one worker, so it is made once
-pytestmark = pytest.mark.xdist_group("quick-report")
 
 # -- published (Meijaard et al. 2007) --------------------------------------------------------
 WEAVE_SPEED = 4.29238253634111       # m/s

@@ -18,9 +18,6 @@ import pytest
 
 from comparisons.cli import main
 
-# the session's quick report (tests/conftest.py) is made once per pytest-xdist worker: these
-# modules share one worker, so it is made once
-pytestmark = pytest.mark.xdist_group("quick-report")
 
 ROOT = Path(__file__).resolve().parents[1]
 COORDINATES = ["xc", "yc", "phi", "theta", "psi", "beta", "gamma", "eps"]   # thesis order

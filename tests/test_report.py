@@ -9,9 +9,6 @@ import pytest
 from comparisons.cli import main
 from comparisons.judgments.summary import summary_table
 
-# the session's quick report (tests/conftest.py) is made once per pytest-xdist worker: these
-# modules share one worker, so it is made once
-pytestmark = pytest.mark.xdist_group("quick-report")
 
 VERDICTS = {"reproduced", "not reproduced", "partly", "not assessed"}
 
