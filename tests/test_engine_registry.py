@@ -87,7 +87,8 @@ def test_builtins_come_from_the_pyproject_declaration():
     regs = {r.name: r.target for r in _pyproject_registrations()}
     assert regs == {"reference": "engines.reference:ReferenceEngine",
                     "pinocchio": "engines.pinocchio:PinocchioEngine",
-                    "exudyn": "engines.exudyn:ExudynEngine"}
+                    "exudyn": "engines.exudyn:ExudynEngine",
+                    "kane": "engines.kane:KaneEngine"}
 
 
 def test_builtin_info_lists_capabilities_contacts_and_options():
