@@ -164,6 +164,12 @@ def _rate_at(a, R, o, V, p, dp) -> tuple[float, float, float]:
             r2[0] * l0 + r2[1] * l1 + r2[2] * l2 + x * py - y * px + wx * dy - wy * dx)
 
 
+#: read-only status arrays of one state (0 ok, 1 singular, 2 non-finite state), not rebuilt per call
+_STATUS = tuple(np.array([k], dtype=np.intc) for k in range(3))
+for _s in _STATUS:
+    _s.setflags(write=False)
+
+
 class PinocchioEngine(Engine):
     """Mass matrix, RNEA, gravity, rolling constraints, forces and forward runs from Pinocchio."""
 
@@ -380,9 +386,11 @@ class PinocchioEngine(Engine):
         a1, a2 = float(a1), float(a2)
         q = np.asarray(q, dtype=float)
         if q.ndim == 1:
-            T = torque_array(torques, 1, True)[0]
+            # the solvers' per-step call: torques already a float (3,) array skip the check
+            T = torques if (type(torques) is np.ndarray and torques.shape == (3,)
+                            and torques.dtype == np.float64) else torque_array(torques, 1, True)[0]
             ddq, lam, st = self._forward_one(q, np.asarray(dq, float), T, a1, a2)
-            return ForwardResult(ddq, lam, np.array([st], dtype=np.intc))
+            return ForwardResult(ddq, lam, _STATUS[st])
         n = q.shape[0]
         T = torque_array(torques, n, False)
         dq = np.broadcast_to(np.asarray(dq, dtype=float), (n, N_Q))
