@@ -22,5 +22,6 @@ Without ``--engine``, the built-in engines other than the reference are checked 
 the project's own test suite runs Pinocchio and Exudyn). Models default to ``thesis``,
 ``thesis-disc``, ``benchmark`` and the two conformance bicycles ``general`` and
 ``general-disc`` (`models.py`: every inertia entry distinct, unequal wheels, an off-axis fork
-centre of mass, so a swapped key or frame cannot hide).
+centre of mass, so a swapped key or frame cannot hide); without ``--model`` the forward runs
+(seconds each) are checked on ``thesis-disc`` and ``general`` only.
 """

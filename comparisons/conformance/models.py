@@ -24,6 +24,9 @@ GENERAL_CHANGES = dict(
     I5xx=0.085, I5yy=0.180, I5zz=0.115,
 )
 DEFAULT_MODELS = ("thesis", "thesis-disc", "benchmark", "general", "general-disc")
+#: the forward-run checks without --model: one named and one general bicycle (each run is
+#: seconds, the term checks milliseconds); every --model given is run
+DEFAULT_TRAJECTORY_MODELS = ("thesis-disc", "general")
 
 
 def general_model(contact: str = "thesis") -> Model:

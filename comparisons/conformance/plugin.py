@@ -152,6 +152,9 @@ def pytest_generate_tests(metafunc):
     want = getattr(metafunc.function, "needs_method", None)
     cands = [c for c in conf.usable() if set(needs) <= set(c.engine.capabilities)
              and (want is None or callable(getattr(c.engine, want, None)))]
+    if "simulate" in needs and not metafunc.config.getoption("bx_models"):
+        from .models import DEFAULT_TRAJECTORY_MODELS   # forward runs are the costly checks
+        cands = [c for c in cands if c.model_name in DEFAULT_TRAJECTORY_MODELS]
     if "quantity" in metafunc.fixturenames:
         from ..judgments.terms import QUANTITIES
         pairs = [(c, q) for c in cands for q in QUANTITIES if c.engine.supports(q)]

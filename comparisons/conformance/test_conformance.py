@@ -85,6 +85,7 @@ TRAJECTORIES = {"stability-psid5": None}
 
 @pytest.mark.parametrize("scenario", list(TRAJECTORIES))
 def test_trajectory_to_the_meaningful_horizon(candidate, conformance, scenario):
+    # (collected for every --model given; without --model, on DEFAULT_TRAJECTORY_MODELS only)
     """The engine's own forward run against the reference's (DOP853, rtol 1e-11, projection),
     all eight coordinates up to the meaningful horizon (two reference runs 1e-9 rad/s apart in
     theta_dot(0) part by 1e-6; beyond it no comparison means anything), within
