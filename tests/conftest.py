@@ -31,7 +31,8 @@ def disc():
 
 @pytest.fixture(scope="session")
 def quick_report(tmp_path_factory):
-    """``bicycle-xval run --quick`` once per test session: (output folder, exit status,
+    """``bicycle-xval run --quick`` (less the Exudyn-only sections) once per test session:
+    (output folder, exit status,
     summary.json). Under pytest-xdist the workers share it: the first to need it makes it while
     holding a lock in the session's common temporary folder, the others read it."""
     import fcntl
@@ -44,7 +45,10 @@ def quick_report(tmp_path_factory):
     with open(root / "quick-report.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         if not status.exists():
-            status.write_text(str(main(["run", "--quick", "--out", str(out)])))
+            # the Exudyn-only sections (convergence, energy, disc builds) are tested directly
+            # in test_exudyn and test_convergence: not run again here
+            status.write_text(str(main(["run", "--quick", "--sections", "terms,benchmark,faults",
+                                        "--out", str(out)])))
     return out, int(status.read_text()), json.loads((out / "summary.json").read_text(encoding="utf-8"))
 
 
