@@ -87,7 +87,9 @@ def _verdict_words(report: str) -> set[str]:
         elif not set("".join(cells)) <= set("-: "):
             for name, cell in zip(header, cells):
                 if name in ("verdict", "as expected", "detected"):
-                    words.add(re.sub(r" \(\d+ of \d+\)$", "", cell))
+                    # 'pass: why' or 'reported: who judges it': the word is before the reason
+                    word = cell.split(": ", 1)[0]
+                    words.add(re.sub(r" \(\d+ of \d+\)$", "", word))
     return words
 
 
