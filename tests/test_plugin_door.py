@@ -107,3 +107,13 @@ def test_an_entry_point_of_an_unknown_package_is_found_and_run(tmp_path, monkeyp
     assert main(["simulate", "--engine", "acme", "--scenario", "stability-psid0",
                  "--fall-limit", "0.4", "--out", str(tmp_path / "a.csv")]) == 0
     assert "fell" in capsys.readouterr().out
+
+
+def test_diagnose_against_another_engine(capsys):
+    """--against ENGINE: the user's engine against Pinocchio (built from the same parameters)
+    instead of the reference; the dropped gyroscopic term is named all the same."""
+    assert main(["diagnose", "--model", "thesis", "--engine", FILE_SPEC, "--engine-option",
+                 "bug=gyroscopic", "--against", "pinocchio", "--states", "8"]) == 1
+    text = capsys.readouterr().out
+    assert "against engine pinocchio" in text
+    assert "localized: Qv via gyroscopic terms w x (I w) (all bodies)" in text

@@ -31,7 +31,9 @@ def add_diagnose_parser(subparsers) -> None:
     from .engines import add_engine_option_argument
     add_engine_option_argument(s)
     s.add_argument("--against", default=None,
-                   help="build the engines from this named model or file instead [the same file]")
+                   help="a named model or file: build the engines from that bicycle instead; or "
+                        "an engine (name or spec): compare with it instead of the reference "
+                        "[the reference, same file]")
     s.add_argument("--states", type=int, default=DEFAULT_STATES,
                    help=f"number of deterministic random states [{DEFAULT_STATES}]")
     s.add_argument("--json", type=Path, default=None, help="also write the diagnosis as JSON")

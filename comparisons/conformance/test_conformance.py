@@ -79,8 +79,9 @@ test_zigzag_torques_and_multipliers.needs_method = "run_inverse"   # collected o
 
 #: the forward scenarios and how much of each is run (s; None: to its end or fall). The stability
 #: run at psi_dot(0) = 5 rad/s leans, steers and rolls (every term and constraint at work) and
-#: falls within about a second on the thesis geometry
-TRAJECTORIES = {"stability-psid5": None}
+#: falls within about a second on the thesis geometry; the replay's first second drives the
+#: bicycle with the zig-zag's rider torques (the S T term)
+TRAJECTORIES = {"stability-psid5": None, "replay": 1.0}
 
 
 @pytest.mark.parametrize("scenario", list(TRAJECTORIES))

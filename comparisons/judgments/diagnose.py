@@ -427,16 +427,22 @@ class Localization:
 
 
 def localize(model: Model, states: States, engines: Sequence[Engine],
-             engine_values: Mapping[str, Mapping[str, np.ndarray]] | None = None) -> Localization:
+             engine_values: Mapping[str, Mapping[str, np.ndarray]] | None = None,
+             truth: Engine | None = None) -> Localization:
     """Compare the model (as the reference engine) with each engine and localize any
     difference. ``engine_values`` (engine name -> `engine_terms`) can be passed in when the same
-    engines are compared with many models (the fault suite)."""
+    engines are compared with many models (the fault suite). ``truth``: another engine to
+    compare with instead of the model (its terms are the baseline; the causes are still fitted
+    on the model's sensitivities, which is what an engine built from the same parameters
+    shares)."""
     tols = load_tolerances()
     values = engine_values if engine_values is not None else \
         {e.name: engine_terms(e, states) for e in engines}
-    ref_engine = load_engine("reference", model)
+    ref_engine = truth if truth is not None else load_engine("reference", model)
     quantities = tuple(c for e in engines for c in compare_terms(ref_engine, e, states))
     ref = model_terms(model, states)
+    if truth is not None:
+        ref = {**ref, **engine_terms(truth, states)}
     checks = tuple(check_terms(ref, values, tols))
     failing = not all(c.passed for c in quantities) or not all(c.passed for c in checks)
     explanation = explain(model, states, ref, values, tols) if failing else None
@@ -536,8 +542,26 @@ def diagnose(params_file: str | Path, against: str | Path | None = None,
     if isinstance(n_states, bool) or not isinstance(n_states, int) or n_states < 4:
         raise ValueError(f"n_states must be an integer >= 4; got {n_states!r}")
     model = Model(resolve_model(params_file))
-    truth = model if against is None else Model(resolve_model(against))
+    against_engine = _engine_named(against)
+    truth = model if against is None or against_engine else Model(resolve_model(against))
     built = [load_engine(e, truth, **dict((options or {}).get(e, {}))) for e in engines]
     states = random_states(n_states, seed=seed)
+    if against_engine:   # the user's engine against another engine, same parameters
+        other = load_engine(str(against), model)
+        return Diagnosis(str(params_file), f"engine {against}", engines, n_states,
+                         localize(model, states, built, truth=other), ())
     return Diagnosis(str(params_file), None if against is None else str(against), engines,
                      n_states, localize(model, states, built), _declared(model, truth))
+
+
+def _engine_named(against) -> bool:
+    """Whether ``--against`` names an engine (a registered name or a ``module:Class`` /
+    ``file.py:Class`` spec) rather than a bicycle (a named model or a parameter file)."""
+    if against is None:
+        return False
+    from engines import available_engines
+    from reference_model import NAMED_MODELS
+    text = str(against)
+    if text in NAMED_MODELS or Path(text).is_file():
+        return False
+    return text in available_engines() or ":" in text
