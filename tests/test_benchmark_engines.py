@@ -51,7 +51,8 @@ def bench():
 @pytest.fixture(scope="module")
 def runs(bench):
     """The three manoeuvres on the reference and both Exudyn builds at h = 1e-3 (~6 s)."""
-    return {mr.scenario.name: mr for mr in run_manoeuvres(bench, MANOEUVRES, ("tree", "redundant"))}
+    return {mr.scenario.name: mr for mr in run_manoeuvres(bench, MANOEUVRES, ("tree", "redundant"),
+                                                                twins=False)}
 
 
 def _trajectory(mr, engine):
