@@ -1,4 +1,5 @@
-"""Generated numpy code for the Kane derivation, cached on disk like the reference model's.
+"""The code generator of the Kane derivation: prints its expressions as a numpy module and caches
+that module on disk like the reference model's (the module is never committed).
 
 The derivation (`engines.kane.derivation`) takes tens of seconds, so it runs once: its
 expressions go through sympy's common-subexpression elimination and are printed as one
