@@ -28,10 +28,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .model import DEP, IND, Model
-from .solvers import (BETA, DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE, ConsistentState, IndependentMotion,
+from .model import DEP, Model
+from .solvers import (DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE, ConsistentState, IndependentMotion,
                       InverseDynamics, Trajectory, consistent_state, inverse_dynamics,
-                      inverse_kinematics, simulate, solve_beta)
+                      inverse_kinematics, simulate)
 
 THESIS_GRID = (0.0, 0.01, 629)   # start, step, samples: 0:0.01:2*pi
 

@@ -23,7 +23,7 @@ FILE_SPEC = f"{EXAMPLE / 'numpy_bicycle' / 'engine.py'}:NumpyEngine"
 
 def _pytest(*args, cwd):
     """The conformance plugin in a fresh process, as an engine author runs it."""
-    env = dict(os.environ, PYTHONHASHSEED="0")
+    env = dict(os.environ, PYTHONHASHSEED="0", COLUMNS="400")   # summary lines not cut
     return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q",
                            "--pyargs", "comparisons.conformance", *args],
                           cwd=cwd, env=env, capture_output=True, text=True, timeout=600)

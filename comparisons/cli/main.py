@@ -343,8 +343,6 @@ def main(argv: list[str] | None = None) -> int:
     import signal
     import warnings
 
-    from reference_model.params import ParameterWarning
-
     def _one_line_warning(message, category, filename, lineno, file=None, line=None):
         print(f"bicycle-xval: warning: {message}", file=sys.stderr)
     show = warnings.showwarning

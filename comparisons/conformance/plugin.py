@@ -30,7 +30,8 @@ class Candidate:
 
     @property
     def id(self) -> str:
-        return f"{_short(self.spec)}-{self.model_name}"
+        from ..stages.runs import label_of
+        return f"{label_of(self.spec)}-{self.model_name}"
 
 
 @dataclass
@@ -60,10 +61,6 @@ class Conformance:
     def usable(self) -> list[Candidate]:
         return [c for c in self.candidates if c.engine is not None]
 
-
-def _short(spec: str) -> str:
-    """An id for a spec: the registered name, or the class name of a path/module spec."""
-    return spec.rsplit(":", 1)[-1] if ":" in spec else spec
 
 
 def pytest_addoption(parser):

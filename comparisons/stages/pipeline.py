@@ -226,7 +226,7 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
 def _buildable(opts: Options):
     """The setups of the selected engines and the engines that cannot be built (each tried on
     the thesis model in this process): (setups, [(engine, reason)])."""
-    from engines import EngineError, load_engine
+    from engines import load_engine
     from reference_model import load_model
     from .runs import setups_for
     setups = setups_for(opts.engines, opts.options_for())
@@ -237,7 +237,7 @@ def _buildable(opts: Options):
             continue
         try:
             load_engine(s.engine, model, **dict(s.options))
-        except (EngineError, Exception) as exc:   # noqa: BLE001 - any failure drops the engine
+        except Exception as exc:   # noqa: BLE001 - any failure drops the engine
             dropped.append((s.engine, f"{type(exc).__name__}: {' '.join(str(exc).split())}"))
     return setups, dropped
 
@@ -255,7 +255,6 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                    ) -> ComparisonResult:
     """Every stage of the run (module docstring), judged; nothing written."""
     from . import benchmark, engines, faults, scenarios
-    from .runs import setups_for
 
     from .cases import build_cases
     from .stability import applies, critical as critical_speeds

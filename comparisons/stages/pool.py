@@ -13,7 +13,7 @@ import os
 import signal
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Hashable
 
 MAX_WORKERS = 8
@@ -49,7 +49,6 @@ class TaskResult:
     value: Any
     seconds: float
     error: str | None = None
-    extra: dict = field(default_factory=dict)
 
 
 def _worker_init() -> None:

@@ -69,7 +69,7 @@ from reference_model.model import torque_array
 from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import THETA, Trajectory
 
-from ..base import Engine, EngineError, EngineSpecError, EngineUsageError
+from ..base import Engine, EngineError, EngineUsageError
 
 try:
     import exudyn as exu
