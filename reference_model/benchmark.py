@@ -548,11 +548,12 @@ def toml_text(
     generator: str = "`python -m reference_model.benchmark --write`",
     uncertainties: Mapping[str, float] | None = None,
     allow_triangle_violation: bool = False,
+    notes: tuple[str, ...] = (),
 ) -> str:
     """The parameter file of the bicycle whose Table 1 values are ``t``: the model's values
     with the formulas as comments, contact "disc" written out, ``[checks] triangle = "warn"``
     if ``allow_triangle_violation``, and ``t`` itself in ``[benchmark]`` (with ``uncertainties``,
-    dropped on import, as comments). ``name`` and ``source`` (a bibliographic source or the
+    dropped on import, as comments; ``notes``, what else the source said, too). ``name`` and ``source`` (a bibliographic source or the
     path of the file imported) are required (a file never takes another bicycle's name) and
     go into ``[model]``; nothing depends on the date.
     Raises like :func:`parameters_from_benchmark` for values it cannot load back."""
@@ -579,6 +580,10 @@ def toml_text(
         "# SI, lam in rad); loading checks that the model's values follow from them.",
         "# Model axes: x forward, z UP; frame axes = global pitched by beta = -lambda (z3 = steering",
         "# axis); c = cos(lambda), s = sin(lambda). Going to z up flips the sign of each xz product.",
+    ]
+    if notes:
+        lines += ["# The source also gave (checked, not stored):"] + [f"#   {n}" for n in notes]
+    lines += [
         "",
         "[model]",
         f"name = {toml_string(name)}",

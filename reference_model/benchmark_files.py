@@ -9,6 +9,13 @@ SI units, lam in rad, benchmark axes x forward, z down). Three spellings are rea
   exponent ``(6.53+/-0.02)e-07``). Blank lines and ``#`` comments are ignored. The uncertainties
   are dropped (the model takes the nominal value) and kept in :attr:`BenchmarkFile.uncertainties`,
   which the importer writes as comments.
+* Besides Table 1's names, BicycleParameters' files may carry values that Table 1 implies
+  (``IRzz``/``IFzz``, equal to ``IRxx``/``IFxx`` for an axisymmetric wheel; ``yB``, ``yH``...,
+  zero for a bicycle symmetric about its xz plane) and the handlebar ``G`` and fork ``S``
+  measured apart (``mG, xG, zG, IGxx, ...``; ``H`` is their assembly, the body the model uses).
+  These are checked (a wheel that is not axisymmetric or an off-plane centre of mass is an
+  error: Table 1 cannot hold it), left out, and said in :attr:`BenchmarkFile.notes`, which the
+  importer writes as comments and ``bicycle-xval import`` prints.
 * **JSON**: one object ``{"w": 1.02, ...}`` of numbers.
 * **TOML**: the same names as top-level keys, ``w = 1.02``.
 
@@ -62,6 +69,7 @@ class BenchmarkFile:
     values: dict[str, Any]
     source: str
     uncertainties: dict[str, float] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()   # what was read besides Table 1's names, checked and left out
 
 
 def _format_of(file: str) -> str:
@@ -125,11 +133,68 @@ def _no_duplicates(file: str):
     return hook
 
 
+# values BicycleParameters writes that Table 1 implies: name -> (what it must equal, why)
+_IMPLIED = {
+    "IRzz": ("IRxx", "the rear wheel is axisymmetric: IRzz = IRxx"),
+    "IFzz": ("IFxx", "the front wheel is axisymmetric: IFzz = IFxx"),
+    **{f"y{b}": (None, "the bicycle is symmetric about its xz plane: y of every centre of mass "
+                       "is 0") for b in "RBHFGS"},
+}
+# the handlebar (G) and fork (S) measured apart; H, their assembly, is the model's body
+_PARTS = {**{f"{q}{b}": b for b in "GS" for q in ("m", "x", "z")},
+          **{f"I{b}{axes}": b for b in "GS" for axes in ("xx", "xy", "xz", "yy", "yz", "zz")}}
+_PART_NAMES = {"G": "handlebar", "S": "fork"}
+_RTOL_IMPLIED = 1e-12   # the same number written twice; only a real difference is refused
+
+
+def _fold_extras(read: BenchmarkFile) -> BenchmarkFile:
+    """Check and leave out the values besides Table 1's names that BicycleParameters writes
+    (module docstring); anything else stays, for the validation to name it."""
+    values = dict(read.values)
+    notes = []
+    for key, (same_as, why) in _IMPLIED.items():
+        if key not in values:
+            continue
+        v = values[key]
+        expected = 0.0 if same_as is None else values.get(same_as)
+        ok = (isinstance(v, (int, float)) and not isinstance(v, bool) and expected is not None
+              and isinstance(expected, (int, float))
+              and abs(v - expected) <= _RTOL_IMPLIED * max(abs(expected), 1e-300))
+        if not ok:
+            target = "0" if same_as is None else f"{same_as} = {expected!r}"
+            raise ParameterError(read.source, key, f"{key} = {v!r}, but {why}; Table 1 "
+                                 "cannot hold a bicycle that differs", f"make {key} equal "
+                                 f"{target} or remove it (the model implies it)")
+        del values[key]
+        notes.append(f"{key} = {v!r}: implied by Table 1 ({why}), checked and not stored")
+    parts = sorted({b for k, b in _PARTS.items() if k in values})
+    for b in parts:
+        keys = [k for k in values if _PARTS.get(k) == b]
+        for k in keys:
+            del values[k]
+        notes.append(f"{', '.join(keys)}: the {_PART_NAMES[b]} ({b}) measured apart, not used: "
+                     "the model's front body is their assembly H (mH, xH, zH, IHxx, IHyy, IHzz, IHxz)")
+    if {"G", "S"} <= set(parts) and all(isinstance(read.values.get(k), (int, float))
+                                        for k in ("mG", "mS", "mH")):
+        total = read.values["mG"] + read.values["mS"]
+        notes.append(f"mG + mS = {total:.6g} kg against mH = {read.values['mH']:.6g} kg in "
+                     "the source "
+                     f"({100 * (total - read.values['mH']) / read.values['mH']:+.1f} %); "
+                     "mH used as given")
+    uncertainties = {k: u for k, u in read.uncertainties.items() if k in values}
+    return BenchmarkFile(values, read.source, uncertainties, read.notes + tuple(notes))
+
+
 def parse_benchmark_text(text: str, file: str | os.PathLike[str], fmt: str | None = None) -> BenchmarkFile:
     """Parse the text of a benchmark-parameter file; ``fmt`` ("txt", "json", "toml") defaults
-    to the file's suffix. Values are not validated yet (see :class:`BenchmarkFile`)."""
+    to the file's suffix. Values are not validated yet (see :class:`BenchmarkFile`), but the
+    extras BicycleParameters writes besides Table 1 are checked and left out (``notes``)."""
     file = os.fspath(file)
     fmt = fmt or _format_of(file)
+    return _fold_extras(_parse_any(text, file, fmt))
+
+
+def _parse_any(text: str, file: str, fmt: str) -> BenchmarkFile:
     if fmt == "txt":
         return _parse_txt(text, file)
     if fmt == "json":
@@ -178,6 +243,7 @@ class ImportedBicycle:
 
     params: Parameters
     text: str
+    notes: tuple[str, ...] = ()   # the source's extras, checked and left out (BenchmarkFile)
 
 
 def import_benchmark(
@@ -201,8 +267,8 @@ def import_benchmark(
                      generator="reference_model.benchmark_files.import_benchmark "
                                "(bicycle-xval import)",
                      uncertainties={k: v for k, v in read.uncertainties.items()},
-                     allow_triangle_violation=allow_triangle_violation)
-    return ImportedBicycle(params, text)
+                     allow_triangle_violation=allow_triangle_violation, notes=read.notes)
+    return ImportedBicycle(params, text, read.notes)
 
 
 def _write_atomically(out: Path, text: str) -> None:

@@ -31,7 +31,6 @@ Tolerances (each a claim):
 from __future__ import annotations
 
 import json
-import math
 import re
 from fractions import Fraction
 from decimal import Decimal
@@ -41,6 +40,7 @@ import numpy as np
 import pytest
 
 from benchmark_sets import DATA, NAMES, TABLE1 as TABLE1_TEXT, sets
+from meijaard_closed_form import closed_form, closed_form_eigenvalues, max_matched_error
 from comparisons.judgments.published import table2_eigenvalues
 from reference_model import ParameterError, Parameters, load_model, load_parameters
 from reference_model.benchmark import (BENCHMARK_NAMES, TABLE1, Table1, reference_parameters,
@@ -61,71 +61,6 @@ PUBLISHED = {   # Meijaard et al. (2007), section 4 (the benchmark's printed mat
 }
 TOL_PUBLISHED, TOL_MATRIX, TOL_EIG, TOL_REVERSE = 1e-13, 1e-10, 1e-10, 1e-14
 SPEEDS = np.arange(0.0, 11.0)
-
-
-# --------------------------------------------------------------------------------------------
-# the benchmark's closed form (Meijaard et al. 2007, appendix A), from the paper
-# --------------------------------------------------------------------------------------------
-
-
-def closed_form(b: dict[str, float]) -> dict[str, np.ndarray]:
-    """M, C1, K0, K2 of the benchmark bicycle with Table 1 values ``b`` (the paper's eqs.)."""
-    w, c, lam, g = b["w"], b["c"], b["lam"], b["g"]
-    rR, mR, IRxx, IRyy = b["rR"], b["mR"], b["IRxx"], b["IRyy"]
-    xB, zB, mB = b["xB"], b["zB"], b["mB"]
-    IBxx, IByy, IBzz, IBxz = b["IBxx"], b["IByy"], b["IBzz"], b["IBxz"]
-    xH, zH, mH = b["xH"], b["zH"], b["mH"]
-    IHxx, IHzz, IHxz = b["IHxx"], b["IHzz"], b["IHxz"]
-    rF, mF, IFxx, IFyy = b["rF"], b["mF"], b["IFxx"], b["IFyy"]
-    IRzz, IFzz = IRxx, IFxx
-    sl, cl = math.sin(lam), math.cos(lam)
-    # the whole bicycle (T)
-    mT = mR + mB + mH + mF
-    xT = (xB * mB + xH * mH + w * mF) / mT
-    zT = (-rR * mR + zB * mB + zH * mH - rF * mF) / mT
-    ITxx = IRxx + IBxx + IHxx + IFxx + mR * rR**2 + mB * zB**2 + mH * zH**2 + mF * rF**2
-    ITxz = IBxz + IHxz - mB * xB * zB - mH * xH * zH + mF * w * rF
-    ITzz = IRzz + IBzz + IHzz + IFzz + mB * xB**2 + mH * xH**2 + mF * w**2
-    # the front assembly (A = H + F)
-    mA = mH + mF
-    xA = (xH * mH + w * mF) / mA
-    zA = (zH * mH - rF * mF) / mA
-    IAxx = IHxx + IFxx + mH * (zH - zA) ** 2 + mF * (rF + zA) ** 2
-    IAxz = IHxz - mH * (xH - xA) * (zH - zA) + mF * (w - xA) * (rF + zA)
-    IAzz = IHzz + IFzz + mH * (xH - xA) ** 2 + mF * (w - xA) ** 2
-    uA = (xA - w - c) * cl - zA * sl
-    IAll = mA * uA**2 + IAxx * sl**2 + 2 * IAxz * sl * cl + IAzz * cl**2
-    IAlx = -mA * uA * zA + IAxx * sl + IAxz * cl
-    IAlz = mA * uA * xA + IAxz * sl + IAzz * cl
-    mu = c / w * cl
-    SR, SF = IRyy / rR, IFyy / rF
-    ST = SR + SF
-    SA = mA * uA + mu * mT * xT
-    return {
-        "M": np.array([[ITxx, IAlx + mu * ITxz],
-                       [IAlx + mu * ITxz, IAll + 2 * mu * IAlz + mu**2 * ITzz]]),
-        "K0": np.array([[mT * zT, -SA], [-SA, -SA * sl]]),
-        "K2": np.array([[0.0, (ST - mT * zT) / w * cl], [0.0, (SA + SF * sl) / w * cl]]),
-        "C1": np.array([[0.0, mu * ST + SF * cl + ITxz / w * cl - mu * mT * zT],
-                        [-(mu * ST + SF * cl), IAlz / w * cl + mu * (SA + ITzz / w * cl)]]),
-    }
-
-
-def closed_form_eigenvalues(mats: dict[str, np.ndarray], g: float, v: float) -> np.ndarray:
-    M, C1, K0, K2 = mats["M"], mats["C1"], mats["K0"], mats["K2"]
-    Minv = np.linalg.inv(M)
-    A = np.block([[np.zeros((2, 2)), np.eye(2)],
-                  [-Minv @ (g * K0 + v**2 * K2), -Minv @ (v * C1)]])
-    return np.linalg.eigvals(A)
-
-
-def _max_matched_error(expected: np.ndarray, got: np.ndarray) -> float:
-    """Largest |expected_i - got_j| / max(1, |expected_i|) after nearest matching."""
-    rest, worst = list(got), 0.0
-    for e in expected:
-        j = int(np.argmin([abs(e - r) for r in rest]))
-        worst = max(worst, abs(e - rest.pop(j)) / max(1.0, abs(e)))
-    return worst
 
 
 def _values(text_name: str) -> dict[str, float]:
@@ -164,7 +99,7 @@ def test_closed_form_reproduces_the_published_matrices_and_table2():
         np.testing.assert_allclose(mats[key], published, rtol=0, atol=TOL_PUBLISHED, err_msg=key)
     for v in range(11):
         got = closed_form_eigenvalues(mats, 9.81, float(v))
-        assert _max_matched_error(table2_eigenvalues(v), got) < TOL_EIG, v
+        assert max_matched_error(table2_eigenvalues(v), got) < TOL_EIG, v
 
 
 @pytest.mark.parametrize("name", SET_FILES)
@@ -179,7 +114,7 @@ def test_linearization_of_each_imported_set_matches_the_closed_form(imported, na
         scale = np.max(np.abs(mat))
         err = np.max(np.abs(got - mat)) / scale
         assert err < TOL_MATRIX, f"{key}: relative error {err:.2e}"
-    worst = max(_max_matched_error(closed_form_eigenvalues(expected, b["g"], v),
+    worst = max(max_matched_error(closed_form_eigenvalues(expected, b["g"], v),
                                    eigenvalues(model, v)) for v in SPEEDS)
     assert worst < TOL_EIG, f"eigenvalues 0..10 m/s: {worst:.2e}"
 
@@ -381,6 +316,11 @@ def _txt(**changes: str) -> str:
     (_txt(lam="18"), r"lam: lam = 18.0 rad is not a steer axis tilt"),
     (_txt(IHxz="0.1"), r"IHxz, IHxx, IHzz: inertia of the front assembly is not positive"),
     (_txt(rF="nan"), r"line 23: rF: value 'nan' is not a number"),
+    # BicycleParameters' extras are checked before they are left out (real sets carry them)
+    (_txt() + "IRzz = 0.0604\n", r"IRzz: IRzz = 0.0604, but the rear wheel is axisymmetric.*"
+                                  r"make IRzz equal IRxx = 0.0603"),
+    (_txt() + "yB = 0.01\n", r"yB: yB = 0.01, but the bicycle is symmetric about its xz plane"),
+    (_txt() + "mD = 1.0\n", r"mD: unknown benchmark parameter"),   # a flywheel: not the model's
 ])
 def test_bad_txt_files(text, pattern, tmp_path):
     path = tmp_path / "bad.txt"

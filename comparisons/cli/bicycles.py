@@ -43,7 +43,7 @@ def add_import_parser(subparsers) -> None:
 
 def run_import(args) -> int:
     """The ``import`` command: writes ``--out`` and prints one line about it."""
-    from reference_model.benchmark_files import write_import
+    from reference_model.benchmark_files import read_benchmark_file, write_import
     from reference_model.params import TriangleInequalityError
 
     if args.name is not None and not args.name.strip():
@@ -62,6 +62,8 @@ def run_import(args) -> int:
                          "units; if they are measured and right, add "
                          "--allow-triangle-violation") from None
     print(f"imported {args.file} as {params.name!r} (contact {params.contact}) -> {args.out}")
+    for note in read_benchmark_file(args.file).notes:
+        print(f"  not stored: {note}")
     for w in params.warnings:
         print(f"  warning: {w}")
     return EXIT_OK
