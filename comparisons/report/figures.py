@@ -316,13 +316,13 @@ def png_bytes(fig) -> bytes:
     """The figure as a palette PNG (deterministic: no software or date metadata)."""
     from PIL import Image
     plt = _plt()
-    buf = io.BytesIO()
+    fig.set_dpi(DPI)
     fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
+    fig.canvas.draw()   # the pixels straight from Agg: no full-colour PNG encoded and decoded again
+    rgba = np.asarray(fig.canvas.buffer_rgba())
     plt.close(fig)
-    buf.seek(0)
-    image = Image.open(buf).convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT,
-                                                     dither=Image.Dither.NONE)
+    image = Image.fromarray(rgba[..., :3]).quantize(colors=256, method=Image.Quantize.MEDIANCUT,
+                                                    dither=Image.Dither.NONE)
     out = io.BytesIO()
     image.save(out, format="png", optimize=True)
     return out.getvalue()
