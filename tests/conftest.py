@@ -62,3 +62,17 @@ def general(thesis):
 def general_disc(general):
     """The general bicycle with the disc front contact."""
     return general.with_params(general.params.with_contact("disc"))
+
+
+@pytest.fixture(scope="session")
+def fast_cc(tmp_path_factory) -> str:
+    """A working compiler command: gcc with -O0 appended (the last -O wins). For tests of the
+    cache's logic, not of the numbers: a -O0 build takes 0.5 s instead of ~4-8 s at -O2 (the
+    compiler is part of the cache key, so these entries never mix with the ordinary ones)."""
+    import shutil
+    if shutil.which("gcc") is None:
+        pytest.fail("these tests need gcc (the C backend is the one under test)")
+    path = tmp_path_factory.mktemp("cc") / "fastcc"
+    path.write_text('#!/bin/sh\nexec gcc "$@" -O0\n')
+    path.chmod(0o755)
+    return str(path)

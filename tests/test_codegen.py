@@ -63,8 +63,9 @@ def test_key_changes_when_any_source_of_the_generated_code_changes(tmp_path):
     assert codegen.cache_key("thesis", package_dir=package, cc=("clang",)) != base
 
 
-def test_build_caches_and_recovers_from_damage(tmp_path, monkeypatch):
+def test_build_caches_and_recovers_from_damage(tmp_path, monkeypatch, fast_cc):
     monkeypatch.setenv("BICYCLE_XVAL_CACHE", str(tmp_path))
+    monkeypatch.setenv("CC", fast_cc)   # the cache's logic, not the numbers: -O0 is enough
     first = codegen.build("thesis")
     assert first.built_now and first.path.parent == tmp_path
     header = (first.path / "bicycle_generated.c").read_text().splitlines()[0]

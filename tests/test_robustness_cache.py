@@ -105,17 +105,6 @@ def _no_litter(cache: Path) -> None:
 
 
 @pytest.fixture(scope="module")
-def fast_cc(tmp_path_factory) -> str:
-    """A working compiler command: gcc with -O0 appended (the last -O wins)."""
-    if shutil.which("gcc") is None:
-        pytest.fail("these tests need gcc (the C backend is the one under test)")
-    path = tmp_path_factory.mktemp("cc") / "fastcc"
-    path.write_text('#!/bin/sh\nexec gcc "$@" -O0\n')
-    path.chmod(0o755)
-    return str(path)
-
-
-@pytest.fixture(scope="module")
 def pristine(tmp_path_factory, fast_cc) -> Path:
     """A cache with the thesis and disc C entries and both linearization evaluators, built in
     this process (so later in-process rebuilds reuse its derivations)."""
