@@ -5,7 +5,7 @@
     model.mass_matrix(q); model.forward_acceleration(q, dq, torques)
 """
 
-from .derivation import BODY_NAMES, COORDINATES, TORQUE_NAMES
+from .names import BODY_NAMES, COORDINATES, TORQUE_NAMES
 from .model import (CONSTRAINT_NAMES, DEPENDENT, INDEPENDENT, Model, ModelEvaluationError,
                     load_model)
 from .params import NAMED_MODELS, ParameterError, Parameters, load_parameters, resolve_model

@@ -17,8 +17,8 @@ on the generated one is an error naming ``CC``.
 
 **Cache.** ``$BICYCLE_XVAL_CACHE`` (default ``$XDG_CACHE_HOME/bicycle-xval`` or
 ``~/.cache/bicycle-xval``), one folder per key. The key hashes the sources the generated code
-depends on (:data:`KEY_SOURCES`: the derivation, the parameter layout, ``runtime.c``, this
-file), the coordinate and parameter layouts, the sympy version, the variant (contact model;
+depends on (:data:`KEY_SOURCES`: the derivation and its names, the parameter layout,
+``runtime.c``, this file and ``codegen_emit``, the printing), the coordinate and parameter layouts, the sympy version, the variant (contact model;
 the gyroscopic-terms-dropped fault variant), the backend and, for C, the compiler command
 and flags. Each folder is written under a temporary name (``.tmp-<variant>-<host>-<pid>-*``)
 and renamed into place, so concurrent runs never read a half-written library; temporaries
@@ -31,6 +31,10 @@ manifest, variant, sizes or hashes differ is removed and rebuilt, so a truncated
 overwritten library is never mapped (which would end the process with SIGBUS or SIGILL) and
 another variant's library is never used. Generated files say in their header that they are
 generated; they are never committed.
+
+**sympy only when generating.** The printers and the CSE live in ``codegen_emit``, imported
+(with sympy and the derivation) only when an entry is generated: a process that loads cached
+code never imports sympy (0.3-0.5 s saved in every CLI command, test worker and subprocess).
 """
 
 from __future__ import annotations
@@ -51,31 +55,32 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
-import sympy as sp
-from sympy.printing.c import C99CodePrinter
-from sympy.printing.numpy import NumPyPrinter
-from sympy.printing.precedence import PRECEDENCE
 
-from . import derivation as dv
+from .names import COORDINATES
 from .params import PARAMETER_NAMES
+
+if TYPE_CHECKING:   # sympy is imported only when code is generated (module doc)
+    from . import derivation as dv
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 RUNTIME_C = PACKAGE_DIR / "runtime.c"
 #: Files of this package the generated code depends on (relative to the package folder):
-#: the derivation (the equations), params.py (the parameter layout p[i]), runtime.c (the
-#: KKT solves, #included), codegen.py (how code is printed), numpy_runtime.py (the numpy
-#: backend's solves). Editing any of them changes the cache key.
-KEY_SOURCES = ("derivation.py", "params.py", "runtime.c", "codegen.py", "numpy_runtime.py",
+#: the derivation (the equations) and names.py (its coordinate and point names), params.py
+#: (the parameter layout p[i]), runtime.c (the KKT solves, #included), codegen.py and
+#: codegen_emit.py (how code is printed), numpy_runtime.py (the numpy backend's solves).
+#: Editing any of them changes the cache key.
+KEY_SOURCES = ("derivation.py", "names.py", "params.py", "runtime.c", "codegen.py",
+               "codegen_emit.py", "numpy_runtime.py",
                "benchmark.py", "benchmark_files.py")   # params.py imports these (file formats)
 CACHE_ENV = "BICYCLE_XVAL_CACHE"
 BACKEND_ENV = "BICYCLE_XVAL_BACKEND"
 BACKENDS = ("c", "numpy")
 DEFAULT_CC = "gcc"
 CFLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fno-fast-math", "-Wno-unused-variable")
-N_Q = len(dv.COORDINATES)
+N_Q = len(COORDINATES)
 MANIFEST = "manifest.json"
 MANIFEST_FORMAT = 2
 C_FILES = ("bicycle_generated.c", "libbicycle.so")
@@ -90,6 +95,14 @@ _LEGACY_TEMP = re.compile(r"^\.((thesis|disc)(-nogyro)?-[a-z0-9_]{8}|linearize-.
 #: through forward_acceleration 10 us (C) vs 3.6 ms (numpy); 1000 mass matrices 0.40 ms vs
 #: 2.4 ms; 1000 forward accelerations 3.2 ms vs 18 ms; 0.5 s of stability-psid5 0.12 s vs 9.0 s.
 NUMPY_SLOWDOWN = "forward runs about 75x slower than C, batched evaluations about 6x"
+
+
+@functools.lru_cache(maxsize=None)
+def sympy_version() -> str:
+    """sympy's version, from its installed metadata (importing sympy costs 0.3-0.5 s, which
+    every process that only loads cached code would pay)."""
+    from importlib.metadata import version
+    return version("sympy")
 
 
 class CodegenError(RuntimeError):
@@ -159,185 +172,13 @@ def cache_key(contact: str, gyroscopic: bool = True, *, backend: str = "c",
         h.update(name.encode())
         h.update((Path(package_dir) / name).read_bytes())
     variant = "" if gyroscopic else ";gyroscopic=0"
-    h.update(f"sympy={sp.__version__};contact={contact}{variant};backend={backend};"
-             f"coordinates={','.join(dv.COORDINATES)};parameters={','.join(PARAMETER_NAMES)};"
+    h.update(f"sympy={sympy_version()};contact={contact}{variant};backend={backend};"
+             f"coordinates={','.join(COORDINATES)};parameters={','.join(PARAMETER_NAMES)};"
              f"machine={platform.machine()}".encode())
     if backend == "c":
         cc = compiler_command() if cc is None else cc
         h.update(f";cc={shlex.join(cc)};flags={' '.join(CFLAGS)}".encode())
     return h.hexdigest()[:20]
-
-
-# -- code emission ---------------------------------------------------------------------
-
-class _Printer(C99CodePrinter):
-    """C99 printer: integer powers as products (exact, and cheaper than pow)."""
-
-    def _print_Pow(self, expr):
-        b, e = expr.as_base_exp()
-        if e.is_Integer and 1 < abs(int(e)) <= 4:
-            base = self.parenthesize(b, PRECEDENCE["Mul"] + 1)
-            prod = "*".join([base] * abs(int(e)))
-            return f"({prod})" if e > 0 else f"(1.0/({prod}))"
-        if e == sp.Rational(1, 2):
-            return f"sqrt({self._print(b)})"
-        if e == -sp.Rational(1, 2):
-            return f"(1.0/sqrt({self._print(b)}))"
-        return super()._print_Pow(expr)
-
-
-class _NumpyPrinter(NumPyPrinter):
-    """numpy printer with the C printer's products for small integer powers (the same
-    operations, so both backends round alike)."""
-
-    def _print_Pow(self, expr, rational=False):
-        b, e = expr.as_base_exp()
-        if e.is_Integer and 1 < abs(int(e)) <= 4:
-            base = self.parenthesize(b, PRECEDENCE["Mul"] + 1)
-            prod = "*".join([base] * abs(int(e)))
-            return f"({prod})" if e > 0 else f"(1.0/({prod}))"
-        return super()._print_Pow(expr, rational=rational)
-
-
-_C_PRINTER = _Printer()
-_NP_PRINTER = _NumpyPrinter({"fully_qualified_modules": True})
-
-
-def _c(expr: sp.Expr) -> str:
-    return _C_PRINTER.doprint(sp.sympify(expr))
-
-
-def _np(expr: sp.Expr) -> str:
-    return _NP_PRINTER.doprint(sp.sympify(expr))
-
-
-@dataclass(frozen=True)
-class _Straight:
-    """One function as straight-line code: assignments (symbol, expression) then outputs
-    (index, expression or the index whose value it copies)."""
-
-    name: str
-    size: int
-    symmetric: int
-    assignments: list = field(default_factory=list)
-    outputs: list = field(default_factory=list)      # (k, expr) or (k, int: copy of out[int])
-
-
-def _straight_line(der: dv.Derivation, name: str, outputs: list[sp.Expr],
-                   symmetric: int = 0) -> _Straight:
-    """CSE of outputs (placeholders resolved in a first CSE stage), shared by both printers."""
-    exprs = [sp.sympify(e) for e in outputs]
-    if symmetric:
-        n = symmetric
-        idx = [(r, c) for r in range(n) for c in range(r, n)]
-        flat = [exprs[r * n + c] for r, c in idx]
-    else:
-        flat = exprs
-    used = set()
-    for e in flat:
-        used |= {s for s in e.free_symbols if s in der.placeholders}
-    ph = sorted(used, key=lambda s: s.name)
-    assignments: list = []
-    if ph:   # stage 1: kinematic placeholders in terms of q, dq, p
-        reps, red = sp.cse([der.placeholders[s] for s in ph],
-                           symbols=sp.numbered_symbols("k"), order="none")
-        assignments += list(reps) + list(zip(ph, red))
-    reps, red = sp.cse(flat, symbols=sp.numbered_symbols("t"), order="none")   # stage 2
-    assignments += list(reps)
-    outs: list = []
-    if symmetric:
-        n = symmetric
-        for (r, c), e in zip(idx, red):
-            outs.append((r * n + c, e))
-            if r != c:
-                outs.append((c * n + r, r * n + c))
-    else:
-        outs = list(enumerate(red))
-    return _Straight(name, len(exprs), symmetric, assignments, outs)
-
-
-def _c_function(der: dv.Derivation, fn: _Straight) -> str:
-    sy = der.symbols
-    body = [f"    const double {s} = q[{i}];" for i, s in enumerate(sy.q)]
-    body += [f"    const double {s} = dq[{i}];" for i, s in enumerate(sy.dq)]
-    body += [f"    const double {s} = p[{i}];" for i, s in enumerate(sy.p)]
-    body += [f"    const double {s} = {_c(e)};" for s, e in fn.assignments]
-    for k, e in fn.outputs:
-        body.append(f"    out[{k}] = out[{e}];" if isinstance(e, int) else f"    out[{k}] = {_c(e)};")
-    return (f"static void bx_{fn.name}(const double *q, const double *dq, const double *p, double *out)\n"
-            "{\n" + "\n".join(body) + "\n}\n\n"
-            f"void bx_{fn.name}_batch(long n, const double *q, const double *dq, const double *p,"
-            f" double *out)\n{{\n    for (long i = 0; i < n; ++i)\n"
-            f"        bx_{fn.name}(q + {N_Q} * i, dq + {N_Q} * i, p, out + {fn.size} * i);\n}}\n\n")
-
-
-def _numpy_function(der: dv.Derivation, fn: _Straight) -> str:
-    """``def <name>(q, dq, p)``: q, dq (n, 8), p (30,) -> out (n, size), vectorized over n."""
-    sy = der.symbols
-    body = [f"    {s} = q[:, {i}]" for i, s in enumerate(sy.q)]
-    body += [f"    {s} = dq[:, {i}]" for i, s in enumerate(sy.dq)]
-    body += [f"    {s} = p[{i}]" for i, s in enumerate(sy.p)]
-    body += [f"    {s} = {_np(e)}" for s, e in fn.assignments]
-    body.append(f"    out = numpy.empty((q.shape[0], {fn.size}))")
-    for k, e in fn.outputs:
-        body.append(f"    out[:, {k}] = out[:, {e}]" if isinstance(e, int) else f"    out[:, {k}] = {_np(e)}")
-    body.append("    return out")
-    return f"def {fn.name}(q, dq, p):\n" + "\n".join(body) + "\n\n\n"
-
-
-def _flat(M: sp.Matrix) -> list[sp.Expr]:
-    return list(M)  # row-major
-
-
-def _specs(der: dv.Derivation) -> list[tuple[str, list[sp.Expr], int]]:
-    pts = der.points
-    return [
-        ("mass_matrix", _flat(der.M), N_Q),
-        ("qv", _flat(der.Qv), 0),
-        ("qgrav", _flat(der.Qgrav), 0),
-        ("qaero", _flat(der.Qaero), 0),
-        ("smat", _flat(der.S), 0),
-        ("constraint_residual", _flat(der.C), 0),
-        ("constraint_jacobian", _flat(der.D), 0),
-        ("constraint_bias", _flat(der.bias), 0),
-        ("energy", [der.kinetic, der.potential], 0),
-        ("points", sum((_flat(pts[k]) for k in POINT_NAMES), []), 0),
-        # combined kernels used by the runtime: one pass shares all subexpressions
-        ("dynamics", _flat(der.M) + _flat(der.Qv + der.Qgrav + der.Qaero) + _flat(der.S), 0),
-        ("constraints", _flat(der.C) + _flat(der.D) + _flat(der.bias), 0),
-        ("mass_bias", _flat(der.M) + _flat(der.Qv + der.Qgrav), 0),   # unconstrained inverse dynamics
-    ]
-
-
-def _variant_note(der: dv.Derivation) -> str:
-    return (f"Contact model: {der.contact}"
-            f"{'' if der.gyroscopic else '; gyroscopic terms dropped (fault variant)'}")
-
-
-def generate_source(der: dv.Derivation, language: str = "c") -> tuple[str, dict[str, GeneratedFunction]]:
-    """All generated functions of one variant: C (plus the runtime, #included) or numpy (the
-    runtime is `numpy_runtime`)."""
-    if language not in BACKENDS:
-        raise ValueError(f"language must be one of {BACKENDS}; got {language!r}")
-    if language == "c":
-        parts = ["/* Generated by reference_model/codegen.py from reference_model/derivation.py.\n"
-                 f" * {_variant_note(der)}. Never hand-edited: rewritten whenever its sources "
-                 "change. */\n#include <math.h>\n\n"]
-    else:
-        parts = ["# Generated by reference_model/codegen.py from reference_model/derivation.py.\n"
-                 f"# {_variant_note(der)}. numpy backend, vectorized over the batch. Never "
-                 "hand-edited.\nimport numpy\n\n\n"]
-    funcs = {}
-    for name, exprs, sym in _specs(der):
-        fn = _straight_line(der, name, exprs, symmetric=sym)
-        parts.append(_c_function(der, fn) if language == "c" else _numpy_function(der, fn))
-        funcs[name] = GeneratedFunction(name, fn.size, fn.symmetric)
-    if language == "c":
-        parts.append('#include "runtime.c"\n')
-    return "".join(parts), funcs
-
-
-POINT_NAMES = ("rC", "rA", "rG2", "rG3", "rG4", "rG5", "rD")
 
 
 # -- compiler --------------------------------------------------------------------------
@@ -572,12 +413,14 @@ def _load_numpy(target: Path, info: dict) -> tuple[dict[str, Callable], dict[str
 @functools.lru_cache(maxsize=None)
 def derivation(contact: str, gyroscopic: bool = True) -> dv.Derivation:
     """The symbolic derivation of a variant, once per process (a few seconds)."""
+    from . import derivation as dv
     return dv.derive(contact, gyroscopic=gyroscopic)
 
 
 @functools.lru_cache(maxsize=None)
 def _source(contact: str, gyroscopic: bool, language: str) -> tuple[str, dict[str, GeneratedFunction]]:
     """The generated source of a variant, once per process (CSE and printing: ~2 s)."""
+    from .codegen_emit import generate_source
     return generate_source(derivation(contact, gyroscopic), language)
 
 
@@ -628,7 +471,7 @@ def _generate_entry(root: Path, contact: str, gyroscopic: bool, backend: str, ke
         else:
             (tmp / NUMPY_FILES[0]).write_text(src, encoding="utf-8")
             files = NUMPY_FILES
-        extra = {"sympy": sp.__version__, "python": sys.version.split()[0],
+        extra = {"sympy": sympy_version(), "python": sys.version.split()[0],
                  "parameters": list(PARAMETER_NAMES),
                  "functions": {k: [v.size, v.symmetric] for k, v in funcs.items()}}
         if backend == "c":

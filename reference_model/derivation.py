@@ -37,12 +37,9 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from .names import BODIES, BODY_NAMES, COORDINATES, TORQUE_NAMES  # noqa: F401 (re-exported)
 from .params import CONTACT_MODELS, PARAMETER_NAMES
 
-COORDINATES = ("xc", "yc", "phi", "theta", "psi", "beta", "gamma", "eps")
-BODIES = (2, 3, 4, 5)
-BODY_NAMES = {2: "rear wheel", 3: "frame+rider", 4: "fork/handlebar", 5: "front wheel"}
-TORQUE_NAMES = ("Mdir", "Mped", "Mvue")
 
 
 @dataclass(frozen=True)

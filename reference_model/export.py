@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
 
-from .derivation import BODY_NAMES, COORDINATES, TORQUE_NAMES
+from .names import BODY_NAMES, COORDINATES, TORQUE_NAMES
 from .params import PARAMETER_NAMES, Parameters, resolve_model
 
 FORMATS = ("urdf", "json")

@@ -67,7 +67,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from . import codegen
-from .derivation import COORDINATES
+from .names import COORDINATES
 from .params import PARAMETER_NAMES, Parameters
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from . import codegen
-from .derivation import BODY_NAMES, COORDINATES, TORQUE_NAMES
+from .names import BODY_NAMES, COORDINATES, POINT_NAMES, TORQUE_NAMES
 from .params import Parameters, resolve_model
 
 INDEPENDENT = ("theta", "psi", "gamma")
@@ -33,7 +33,6 @@ def _index(names) -> np.ndarray:
 IND = _index(INDEPENDENT)   # positions of theta, psi, gamma in q
 DEP = _index(DEPENDENT)     # positions of xc, yc, phi, beta, eps in q
 CONSTRAINT_NAMES = ("rD_z", "vC_x", "vC_y", "vD_x", "vD_y")
-POINT_NAMES = codegen.POINT_NAMES
 N_Q, N_C = 8, 5
 
 _STATUS = {1: "the linear system is singular (constraint Jacobian rank-deficient or M not positive "

@@ -96,7 +96,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .derivation import COORDINATES
+from .names import COORDINATES
 
 __all__ = ["MOORE_COORDINATES", "MOORE_DESCRIPTIONS", "MooreState", "from_moore",
            "rates_from_moore", "rates_to_moore", "to_moore"]

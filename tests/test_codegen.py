@@ -5,6 +5,7 @@ import ast
 import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -101,3 +102,18 @@ def test_generated_code_is_not_committed():
     except (OSError, subprocess.CalledProcessError):
         pytest.fail("tests run from a git checkout; git ls-files failed")
     assert not [f for f in files if f.endswith((".so", "bicycle_generated.c"))]
+
+
+def test_loading_cached_code_does_not_import_sympy():
+    """sympy (0.3-0.5 s to import) is for generating code only: the CLI, the pipeline and a
+    model evaluated from the cache must not import it. Planted: a top-level ``import sympy``
+    in reference_model/codegen.py fails this."""
+    load_model("thesis").mass_matrix(np.zeros(8))     # the entry exists before the subprocess
+    code = ("import sys, numpy as np, comparisons.cli.main, comparisons.stages.pipeline, engines\n"
+            "from reference_model import load_model\n"
+            "load_model('thesis').mass_matrix(np.zeros(8))\n"
+            "print(sorted(m for m in sys.modules if m == 'sympy' or m.startswith('sympy.'))[:3])")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr[-1000:]
+    assert out.stdout.strip() == "[]", f"sympy imported: {out.stdout.strip()}"
