@@ -31,6 +31,8 @@ TARGETS = {
     "zigzag_id": 0.5,
     "forward_2pi": 2.0,
     "pin_rhs_ratio": 5.0,
+    "cmd_run_quick": 8.0,
+    "cmd_run_full": 25.0,
 }
 
 
@@ -46,6 +48,7 @@ class Row:
     measured_text: str | None = None   # overrides the formatted value (e.g. "min / max")
     judged: float | None = None    # the value compared with the target (default: value)
     details: dict = field(default_factory=dict)
+    vs_crba: bool = True           # a ratio to crba means something (not for whole commands)
 
     @property
     def within(self) -> bool | None:

@@ -13,7 +13,7 @@ def table(rows: list[Row], crba: float) -> str:
     for r in rows:
         if r.unit == "s":
             measured = r.measured_text or fmt_time(r.value)
-            ratio = fmt_ratio(r.value / crba) if r.value is not None else "-"
+            ratio = fmt_ratio(r.value / crba) if r.value is not None and r.vs_crba else "-"
         elif r.unit == "x":
             measured, ratio = fmt_ratio(r.value), "-"
         else:

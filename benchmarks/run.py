@@ -7,7 +7,8 @@ subprocess with a fresh temporary cache), warm load from that cache, the single-
 batched model calls, the constrained right-hand side of a forward run on the reference and on
 the Pinocchio adapter, the zig-zag inverse dynamics, 2*pi s forward runs at rtol 1e-10, and, as
 the yardstick, Pinocchio's ``crba`` and ``rnea`` on the same thesis tree (checked against the
-reference mass matrix first). Prints an aligned table and writes the same numbers as JSON.
+reference mass matrix first), and the whole commands ``bicycle-xval run --quick`` and ``run``
+(`command_timings.py`; ``--no-commands`` skips them). Prints an aligned table and writes the same numbers as JSON.
 
 The sections live beside this entry point: `common.py` (rows, machine facts, timing helpers,
 states), `reference_timings.py` (the reference model's calls and runs), `engine_timings.py`
@@ -36,6 +37,7 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:  # `python benchmarks/run.py` without PYTHONPATH (make bench)
     sys.path.insert(0, str(ROOT))
 
+from benchmarks.command_timings import bench_commands  # noqa: E402
 from benchmarks.common import (N_BATCH, N_SINGLE, SEED, TARGETS, CpuMonitor, Row,  # noqa: E402
                                busy_warning, machine_info, machine_line, random_states,
                                run_interleaved, timed_import)
@@ -69,6 +71,8 @@ def rhs_rows(micros: dict, rounds: int) -> list[Row]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer repetitions (about a third of the time)")
+    ap.add_argument("--no-commands", action="store_true",
+                    help="skip the whole-command timings of bicycle-xval run (about a minute)")
     ap.add_argument("--json", type=Path, default=DEFAULT_JSON, help=f"JSON output (default {DEFAULT_JSON})")
     args = ap.parse_args(argv)
     if threading.current_thread() is threading.main_thread():
@@ -120,6 +124,9 @@ def main(argv: list[str] | None = None) -> int:
     rows += bench_exudyn()
     progress("Exudyn forward runs against the reference (thesis-disc)...")
     rows += bench_exudyn_scenarios(args.quick)
+    if not args.no_commands:
+        progress("whole commands: bicycle-xval run --quick and run (fresh processes)...")
+        rows += bench_commands(1 if args.quick else 2, progress)
     crba = micros["pin_crba"].best
 
     print()

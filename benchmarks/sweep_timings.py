@@ -147,7 +147,7 @@ def main(argv=None) -> int:
             rec["projection"][cores] = {"terms_eigen_s": te}
         print(line)
     if a.json:
-        from comparisons.report.files import write_text
+        from comparisons.stages.files import write_text
         write_text(a.json, json.dumps(rec, indent=1, default=float) + "\n")
     return 0
 
