@@ -119,7 +119,7 @@ class MujocoEngine(Engine):
         # fork-axis front contact has no MuJoCo counterpart
         if model.contact != "disc":
             self.capabilities = frozenset(TERMS)
-        self._run_model = None
+        self._run_models: dict = {}
 
     def __repr__(self) -> str:
         return (f"MujocoEngine(model={self.model.name!r}, contact={self.model.contact!r}, "
@@ -170,12 +170,14 @@ class MujocoEngine(Engine):
         return self._batched(self._gravity_one, q)
 
     # -- forward runs ------------------------------------------------------------------
-    def run_model(self):
-        """The chain with the rear height joint zc and contacts on (built on first use)."""
-        if self._run_model is None:
-            text = mjcf_text(self.model.params, self.settings, rear_height=True)
-            self._run_model = (text, compile_mjcf(text, massless_links(True)))
-        return self._run_model
+    def run_model(self, settings: MjcfSettings | None = None):
+        """(MJCF text, MjModel) of the run's chain: the rear height joint zc, contacts on;
+        built on first use per settings (the engine's own by default)."""
+        settings = self.settings if settings is None else settings
+        if settings not in self._run_models:
+            text = mjcf_text(self.model.params, settings, rear_height=True)
+            self._run_models[settings] = (text, compile_mjcf(text, massless_links(True)))
+        return self._run_models[settings]
 
     def simulate(self, scenario, **options):
         if "simulate" not in self.capabilities:
