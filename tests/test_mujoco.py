@@ -100,6 +100,16 @@ def test_exported_mjcf_read_by_mujoco_gives_the_reference_mass_matrix(tmp_path, 
         assert np.abs(M - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
+def test_cli_export_writes_an_mjcf_mujoco_reads(tmp_path, capsys):
+    from comparisons.cli import main
+    out = tmp_path / "bike.xml"
+    assert main(["export", "--model", "thesis-disc", "--format", "mjcf", "--out", str(out)]) == 0
+    assert "'thesis-disc' as MJCF" in capsys.readouterr().out
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert (m.nq, m.nv, m.ngeom) == (8, 8, 3)      # the ground plane and two wheel cylinders
+    assert "NOT IN THIS FILE: the aerodynamic drag" in out.read_text()
+
+
 def test_mjcf_is_deterministic_and_bad_settings_are_named():
     p = load_model("thesis").params
     assert mjcf_text(p) == mjcf_text(p)

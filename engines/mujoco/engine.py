@@ -80,8 +80,11 @@ def compile_mjcf(text: str, links: tuple[str, ...]) -> "mujoco.MjModel":
 
 
 class MujocoEngine(Engine):
-    """Mass matrix (CRB), RNE inverse dynamics and gravity from MuJoCo; forward runs with
-    MuJoCo's soft wheel-ground contact (disc-contact models)."""
+    """MuJoCo's CRB mass matrix, RNE inverse dynamics, gravity; runs on its contact (disc only).
+
+    Forward runs use MuJoCo's soft wheel-ground contact, which approximates the rolling-disc
+    contact; on a model with the thesis's fork-axis front contact the instance offers the
+    three terms only."""
 
     name = "mujoco"
     capabilities = frozenset(TERMS | {"simulate"})
