@@ -12,7 +12,7 @@ from hypothesis import given, settings
 
 from comparisons.judgments.terms import compare_term, random_states, States
 from comparisons.judgments.tolerances import load_tolerances
-from engines import EngineUsageError
+from engines import CapabilityError, EngineUsageError
 from engines.mujoco import MujocoEngine
 from reference_model import COORDINATES, load_model
 from reference_model.export import export_model
@@ -42,10 +42,13 @@ def engines(general_disc):
 @pytest.mark.parametrize("quantity", TERMS)
 def test_terms_equal_reference_on_a_sweep(engines, quantity):
     """M, M ddq - Qv - Qgrav and Qgrav on 100 deterministic states (lean to 1.2 rad, steer to
-    1.55, rates to 20 rad/s) within tolerances.toml: 1e-12 relative for M and gravity (round-off
-    of ~1e2 products: measured 2.6e-15), 1e-10 of the largest term for inverse dynamics."""
+    1.55, rates to 20 rad/s) within 1e-12 relative (M and gravity to max|entry|, inverse
+    dynamics to its largest term; tolerances.toml allows 1e-10 for the latter), the issue's bar
+    for this engine: both sides sum ~1e2 products of O(1-100) numbers, so round-off is ~1e-15
+    (measured 2.6e-15, 8e-15, 6e-15 on thesis, thesis-disc, benchmark)."""
     ref, eng = engines
-    res = compare_term(quantity, ref, eng, random_states(100, seed=21), TOLERANCES[quantity])
+    tol = dataclasses.replace(TOLERANCES[quantity], tolerance=1e-12)
+    res = compare_term(quantity, ref, eng, random_states(100, seed=21), tol)
     assert res.passed, res.describe()
 
 
@@ -56,8 +59,9 @@ def test_terms_equal_reference_at_hypothesis_states(engines, s):
     q, dq = s
     ddq = np.linspace(-5.0, 5.0, 8)
     one = States(q[None], dq[None], ddq[None], np.zeros((1, 3)))
-    for quantity in TERMS:
-        res = compare_term(quantity, ref, eng, one, TOLERANCES[quantity])
+    for quantity in TERMS:      # 1e-12 for every term, as on the sweep above
+        tol = dataclasses.replace(TOLERANCES[quantity], tolerance=1e-12)
+        res = compare_term(quantity, ref, eng, one, tol)
         assert res.passed, res.describe()
 
 
@@ -139,7 +143,7 @@ def test_thesis_contact_has_terms_but_no_forward_runs(thesis):
     """The thesis's fork-axis front contact has no MuJoCo counterpart: no simulate."""
     eng = MujocoEngine(thesis)
     assert eng.capabilities == frozenset(TERMS)
-    with pytest.raises(EngineUsageError, match="use a disc-contact model"):
+    with pytest.raises(CapabilityError, match="cannot simulate model 'thesis'.*use a disc-contact"):
         eng.simulate(SCENARIOS["check-forward"])
 
 

@@ -40,7 +40,7 @@ import numpy as np
 from reference_model import COORDINATES, Model
 from reference_model.export_mjcf import MjcfSettings, massless_links, mjcf_text
 
-from ..base import Engine, EngineError, EngineUsageError
+from ..base import CapabilityError, Engine, EngineError, EngineUsageError
 
 try:
     import mujoco
@@ -184,9 +184,9 @@ class MujocoEngine(Engine):
 
     def simulate(self, scenario, **options):
         if "simulate" not in self.capabilities:
-            raise EngineUsageError(
-                f"MuJoCo's forward runs approximate the rolling-disc contact; model "
-                f"{self.model.name!r} has the thesis's fork-axis front contact ({self.model.contact!r}); "
-                "use a disc-contact model (thesis-disc, benchmark)")
+            raise CapabilityError(
+                f"engine 'mujoco' cannot simulate model {self.model.name!r}: its forward runs "
+                f"approximate the rolling-disc contact, and this model has the thesis's fork-axis "
+                f"front contact; use a disc-contact model (thesis-disc, benchmark)")
         from .run import simulate
         return simulate(self, scenario, **options)
