@@ -246,3 +246,16 @@ def test_pedal_torque_and_drag_drive_the_straight_roll(disc):
                     t_eval=traj.t, rtol=1e-12, atol=1e-14)
     assert np.abs(traj.dq[:, 0] - law.y[0]).max() <= 1e-6
     assert np.abs(traj.dq[:, 3]).max() < 1e-6          # it stays upright
+
+
+def test_a_run_mujoco_resets_fails_with_the_partial_trajectory(disc, capfd):
+    """A pedal torque of 1e300 N m makes MuJoCo's accelerations non-finite; MuJoCo then resets
+    its state and counts a warning. The run must end 'failed' at the last sample before, say
+    why in one line (MuJoCo's own text included), hold no NaN and print nothing."""
+    sc = dataclasses.replace(SCENARIOS["check-forward"], torques=(0.0, 1e300, 0.0),
+                             grid=(0.0, 0.01, 11))
+    traj = MujocoEngine(disc).simulate(sc)
+    assert traj.status == "failed" and "MuJoCo reset the simulation (mjWARN_BADQACC)" in traj.message
+    assert "QACC" in traj.message and "\n" not in traj.message
+    assert traj.t.tolist() == [0.0] and np.all(np.isfinite(traj.q))
+    assert capfd.readouterr() == ("", "")          # C-level output included
