@@ -1,7 +1,8 @@
-"""The bicycle for other tools: URDF (the rigid-body tree) and JSON (everything, incl. contact).
+"""The bicycle for other tools: URDF (the rigid-body tree), MJCF (the tree with MuJoCo's
+wheel-ground contact, `reference_model.export_mjcf`) and JSON (everything, incl. contact).
 
     from reference_model.export import export_model
-    export_model("thesis", "urdf", "bicycle.urdf")       # or "json"; a name or a .toml file
+    export_model("thesis", "urdf", "bicycle.urdf")       # or "mjcf", "json"; a name or a .toml file
 
 The description is engine-neutral, built from a `Parameters` set only, so it lives with the
 model (nothing here imports an engine). The tree is the thesis's chain of joints, one joint per
@@ -30,10 +31,11 @@ from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
 
+from .export_mjcf import mjcf_text
 from .names import BODY_NAMES, COORDINATES, TORQUE_NAMES
 from .params import PARAMETER_NAMES, Parameters, resolve_model
 
-FORMATS = ("urdf", "json")
+FORMATS = ("urdf", "mjcf", "json")
 SCHEMA = "bicycle-xval/model-export/1"
 
 COORDINATE_MEANING = {
@@ -226,13 +228,15 @@ def json_text(p: Parameters) -> str:
 
 def export_model(model: str | os.PathLike[str] | Parameters, fmt: str, out: str | os.PathLike[str]) -> Path:
     """Write the model (a named model, a parameter .toml file or `Parameters`) as ``fmt``
-    ('urdf' or 'json') to ``out``; returns the path. The file is written to a temporary file
+    ('urdf', 'mjcf' or 'json') to ``out``; returns the path. MJCF gets the default contact
+    settings (`export_mjcf.MjcfSettings`). The file is written to a temporary file
     beside ``out`` and renamed, so no half-written file is ever left. Raises ValueError for an
     unknown format, `ParameterError` for a bad model, OSError for an unwritable path."""
     if fmt not in FORMATS:
-        raise ValueError(f"format {fmt!r} is not one of {', '.join(FORMATS)}; use --format urdf or json")
+        raise ValueError(f"format {fmt!r} is not one of {', '.join(FORMATS)}; use --format "
+                         f"{', '.join(FORMATS[:-1])} or {FORMATS[-1]}")
     p = resolve_model(model)
-    text = urdf_text(p) if fmt == "urdf" else json_text(p)
+    text = {"urdf": urdf_text, "mjcf": mjcf_text, "json": json_text}[fmt](p)
     out = Path(out)
     fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", prefix=f".{out.name}.",
                                suffix=".tmp")

@@ -230,6 +230,10 @@ class Trajectory:
 
     When the run ends early, the grid stops at the last sample reached and the final row is
     the event itself (the fall, or the last accepted step before a failure). No NaNs.
+
+    ``diagnostics`` holds an engine's own per-sample quantities on the same grid, each an (N,)
+    array (e.g. a soft-contact engine's slip speeds and penetrations; empty for exact
+    rolling, whose residuals are ``C``).
     """
 
     t: np.ndarray          # (N,)
@@ -243,6 +247,7 @@ class Trajectory:
     t_end: float
     settings: dict = field(default_factory=dict)   # deterministic: method, tolerances, ...
     timing: dict = field(default_factory=dict)     # volatile: wall time, evaluations
+    diagnostics: dict = field(default_factory=dict)  # name -> (N,) array on the output grid
 
 
 class _RhsFailure(Exception):

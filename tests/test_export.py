@@ -115,7 +115,7 @@ def test_json_describes_tree_contact_and_parameters(tmp_path, name):
 
 
 def test_bad_format_and_model_and_no_half_written_file(tmp_path):
-    with pytest.raises(ValueError, match="format 'sdf' is not one of urdf, json"):
+    with pytest.raises(ValueError, match="format 'sdf' is not one of urdf, mjcf, json"):
         export_model("thesis", "sdf", tmp_path / "b.sdf")
     with pytest.raises(ParameterError, match="unknown model 'thesis-dsic'"):
         export_model("thesis-dsic", "urdf", tmp_path / "b.urdf")

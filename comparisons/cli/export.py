@@ -1,6 +1,6 @@
 """``bicycle-xval export``: a model written in another description.
 
-    bicycle-xval export --model NAME|FILE --format benchmark|urdf|json --out PATH
+    bicycle-xval export --model NAME|FILE --format benchmark|urdf|mjcf|json --out PATH
 
 Formats are rows of `EXPORT_FORMATS`: a name, what it writes, and the writer
 ``(model, out) -> str`` (one line for the terminal). ``benchmark`` writes Meijaard et al.
@@ -49,6 +49,9 @@ EXPORT_FORMATS: dict[str, ExportFormat] = {f.name: f for f in (
     ExportFormat("urdf", "the four bodies and the thesis's joint chain for robotics engines "
                  "(URDF cannot express the rolling contact; the file says so)", (".urdf",),
                  _write_description("urdf")),
+    ExportFormat("mjcf", "the thesis's joint chain for MuJoCo, wheels as thin cylinders on a "
+                 "ground plane with MuJoCo's soft contact (a declared approximation of rolling; "
+                 "the file says so)", (".xml", ".mjcf"), _write_description("mjcf")),
     ExportFormat("json", "everything, the rolling-contact constraints included, for any engine",
                  (".json",), _write_description("json")),
 )}
