@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-BUILTIN_ENGINES = ("pinocchio", "exudyn")
+BUILTIN_ENGINES = ("pinocchio", "exudyn", "mujoco")
 
 
 @dataclass
@@ -67,7 +67,7 @@ def pytest_addoption(parser):
     g = parser.getgroup("bicycle-xval", "bicycle-xval engine conformance")
     g.addoption("--engine", dest="bx_engines", action="append", default=[], metavar="SPEC",
                 help="engine to check: a registered name, package.module:Class or "
-                     "path/file.py:Class (repeatable) [the built-ins: pinocchio, exudyn]")
+                     "path/file.py:Class (repeatable) [the built-ins: pinocchio, exudyn, mujoco]")
     g.addoption("--engine-option", dest="bx_options", action="append", default=[],
                 metavar="KEY=VALUE", help="an option for every --engine (repeatable)")
     g.addoption("--model", dest="bx_models", action="append", default=[], metavar="NAME|FILE",
@@ -172,15 +172,49 @@ def reference(conformance, candidate):
     return conformance.reference(candidate.model_name)
 
 
+def declared_xfails(engine) -> dict[str, str]:
+    """The expected failures an engine declares itself: its ``conformance_xfails``, a mapping
+    ``{check id pattern: reason}`` or the path of a file in the ``--xfails-file`` format.
+    In a pattern ``*`` matches anything (nothing else is special) and ``{engine}`` stands for the engine's label in the ids,
+    e.g. ``test_trajectory_to_the_meaningful_horizon[{engine}-*-stability-psid5]``."""
+    declared = getattr(engine, "conformance_xfails", None) or {}
+    if isinstance(declared, (str, Path)):
+        declared = read_xfails(Path(declared))
+    return dict(declared)
+
+
+def _engine_xfail(item) -> str | None:
+    """The reason, if the candidate's engine declares this check an expected failure."""
+    import re
+
+    from ..stages.runs import label_of
+    cand = getattr(getattr(item, "callspec", None), "params", {}).get("candidate")
+    if not isinstance(cand, Candidate) or cand.engine is None:
+        return None
+    label = label_of(cand.spec)
+    for pattern, reason in declared_xfails(cand.engine).items():
+        # only * is special (ids hold brackets, which fnmatch would read as character sets)
+        regex = ".*".join(re.escape(part) for part in pattern.replace("{engine}", label).split("*"))
+        if re.fullmatch(regex, item.name):
+            return f"declared by {label}: {reason}"
+    return None
+
+
 def pytest_collection_modifyitems(config, items):
+    """Expected failures, strict (a listed check that passes fails the session, so no list
+    goes stale): the ones each engine declares (`declared_xfails`), then ``--xfails-file``'s,
+    which take precedence."""
     conf = getattr(config, "_bx_conformance", None)
-    if conf is None or not conf.xfails:
+    if conf is None:
         return
     seen = set()
     for item in items:
         reason = conf.xfails.get(item.name) or conf.xfails.get(item.nodeid)
         if reason is not None:
             seen.add(item.name if item.name in conf.xfails else item.nodeid)
+        else:
+            reason = _engine_xfail(item)
+        if reason is not None:
             item.add_marker(pytest.mark.xfail(reason=reason, strict=True))
     unknown = sorted(set(conf.xfails) - seen)
     if unknown:

@@ -35,6 +35,8 @@ damping ratio), ``solimp`` (dmin, dmax, width, midpoint, power), ``friction``, `
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from reference_model import COORDINATES, Model
@@ -88,6 +90,8 @@ class MujocoEngine(Engine):
 
     name = "mujoco"
     capabilities = frozenset(TERMS | {"simulate"})
+    #: the conformance checks MuJoCo is expected to fail, with the reason (read by the plugin)
+    conformance_xfails = Path(__file__).with_name("conformance_xfails.txt")
 
     def __init__(self, model: Model, timestep: float = DEFAULTS.timestep,
                  integrator: str = DEFAULTS.integrator, solref=DEFAULTS.solref,
