@@ -56,7 +56,7 @@ def test_inverse_dynamics_writes_the_documented_csv(tmp_path, capsys):
                 + [f"lambda_{k}" for k in range(1, 6)])
     assert list(frame.columns) == expected
     assert len(frame) == 629                                  # t = 0:0.01:2*pi
-    # 0.01 k written with 17 significant digits: exact to an ulp of 2 pi
+    # 0.01 k written as its shortest exact decimal: exact to an ulp of 2 pi
     np.testing.assert_allclose(frame["t"], 0.01 * np.arange(629), rtol=0, atol=1e-15)
     assert np.all(np.isfinite(frame.to_numpy()))
     # full precision survives the file: the thesis's printed dphi(0) to its 15 decimals

@@ -3,7 +3,7 @@ optionally a figure.
 
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out eig.csv [--figure eig.png]
 
-CSV columns as `comparisons.judgments.eigenvalues.eigenvalue_table`, 17 significant digits.
+CSV columns as `comparisons.judgments.eigenvalues.eigenvalue_table`, each value its shortest exact decimal.
 """
 
 from __future__ import annotations
