@@ -108,6 +108,8 @@ def test_triangle_violation_needs_the_flag_and_then_warns(tmp_path, capsys):
      ("t.yaml", ".toml")),
     (("export", "--model", "benchmark", "--format", "sdf", "--out", "{tmp}/t.txt"),
      ("--format",)),
+    (("export", "--model", "thesis-disc", "--format", "mjcf", "--out", "{tmp}/t.urdf"),
+     ("t.urdf", ".xml")),
     (("export", "--model", "nope.toml", "--format", "benchmark", "--out", "{tmp}/t.txt"),
      ("nope.toml",)),
 ])

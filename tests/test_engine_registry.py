@@ -88,7 +88,8 @@ def test_builtins_come_from_the_pyproject_declaration():
     assert regs == {"reference": "engines.reference:ReferenceEngine",
                     "pinocchio": "engines.pinocchio:PinocchioEngine",
                     "exudyn": "engines.exudyn:ExudynEngine",
-                    "kane": "engines.kane:KaneEngine"}
+                    "kane": "engines.kane:KaneEngine",
+                    "mujoco": "engines.mujoco:MujocoEngine"}
 
 
 def test_builtin_info_lists_capabilities_contacts_and_options():

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 
 from comparisons.judgments.terms import compare_term, random_states, States
 from comparisons.judgments.tolerances import load_tolerances
-from engines import EngineUsageError
+from engines import CapabilityError, EngineUsageError
 from engines.mujoco import MujocoEngine
 from reference_model import COORDINATES, load_model
 from reference_model.export import export_model
@@ -42,10 +42,13 @@ def engines(general_disc):
 @pytest.mark.parametrize("quantity", TERMS)
 def test_terms_equal_reference_on_a_sweep(engines, quantity):
     """M, M ddq - Qv - Qgrav and Qgrav on 100 deterministic states (lean to 1.2 rad, steer to
-    1.55, rates to 20 rad/s) within tolerances.toml: 1e-12 relative for M and gravity (round-off
-    of ~1e2 products: measured 2.6e-15), 1e-10 of the largest term for inverse dynamics."""
+    1.55, rates to 20 rad/s) within 1e-12 relative (M and gravity to max|entry|, inverse
+    dynamics to its largest term; tolerances.toml allows 1e-10 for the latter), the issue's bar
+    for this engine: both sides sum ~1e2 products of O(1-100) numbers, so round-off is ~1e-15
+    (measured 2.6e-15, 8e-15, 6e-15 on thesis, thesis-disc, benchmark)."""
     ref, eng = engines
-    res = compare_term(quantity, ref, eng, random_states(100, seed=21), TOLERANCES[quantity])
+    tol = dataclasses.replace(TOLERANCES[quantity], tolerance=1e-12)
+    res = compare_term(quantity, ref, eng, random_states(100, seed=21), tol)
     assert res.passed, res.describe()
 
 
@@ -56,8 +59,9 @@ def test_terms_equal_reference_at_hypothesis_states(engines, s):
     q, dq = s
     ddq = np.linspace(-5.0, 5.0, 8)
     one = States(q[None], dq[None], ddq[None], np.zeros((1, 3)))
-    for quantity in TERMS:
-        res = compare_term(quantity, ref, eng, one, TOLERANCES[quantity])
+    for quantity in TERMS:      # 1e-12 for every term, as on the sweep above
+        tol = dataclasses.replace(TOLERANCES[quantity], tolerance=1e-12)
+        res = compare_term(quantity, ref, eng, one, tol)
         assert res.passed, res.describe()
 
 
@@ -100,6 +104,16 @@ def test_exported_mjcf_read_by_mujoco_gives_the_reference_mass_matrix(tmp_path, 
         assert np.abs(M - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
+def test_cli_export_writes_an_mjcf_mujoco_reads(tmp_path, capsys):
+    from comparisons.cli import main
+    out = tmp_path / "bike.xml"
+    assert main(["export", "--model", "thesis-disc", "--format", "mjcf", "--out", str(out)]) == 0
+    assert "'thesis-disc' as MJCF" in capsys.readouterr().out
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert (m.nq, m.nv, m.ngeom) == (8, 8, 3)      # the ground plane and two wheel cylinders
+    assert "NOT IN THIS FILE: the aerodynamic drag" in out.read_text()
+
+
 def test_mjcf_is_deterministic_and_bad_settings_are_named():
     p = load_model("thesis").params
     assert mjcf_text(p) == mjcf_text(p)
@@ -129,7 +143,7 @@ def test_thesis_contact_has_terms_but_no_forward_runs(thesis):
     """The thesis's fork-axis front contact has no MuJoCo counterpart: no simulate."""
     eng = MujocoEngine(thesis)
     assert eng.capabilities == frozenset(TERMS)
-    with pytest.raises(EngineUsageError, match="use a disc-contact model"):
+    with pytest.raises(CapabilityError, match="cannot simulate model 'thesis'.*use a disc-contact"):
         eng.simulate(SCENARIOS["check-forward"])
 
 
@@ -232,3 +246,16 @@ def test_pedal_torque_and_drag_drive_the_straight_roll(disc):
                     t_eval=traj.t, rtol=1e-12, atol=1e-14)
     assert np.abs(traj.dq[:, 0] - law.y[0]).max() <= 1e-6
     assert np.abs(traj.dq[:, 3]).max() < 1e-6          # it stays upright
+
+
+def test_a_run_mujoco_resets_fails_with_the_partial_trajectory(disc, capfd):
+    """A pedal torque of 1e300 N m makes MuJoCo's accelerations non-finite; MuJoCo then resets
+    its state and counts a warning. The run must end 'failed' at the last sample before, say
+    why in one line (MuJoCo's own text included), hold no NaN and print nothing."""
+    sc = dataclasses.replace(SCENARIOS["check-forward"], torques=(0.0, 1e300, 0.0),
+                             grid=(0.0, 0.01, 11))
+    traj = MujocoEngine(disc).simulate(sc)
+    assert traj.status == "failed" and "MuJoCo reset the simulation (mjWARN_BADQACC)" in traj.message
+    assert "QACC" in traj.message and "\n" not in traj.message
+    assert traj.t.tolist() == [0.0] and np.all(np.isfinite(traj.q))
+    assert capfd.readouterr() == ("", "")          # C-level output included

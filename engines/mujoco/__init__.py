@@ -1,4 +1,4 @@
-"""The thesis bicycle in MuJoCo: its tree from the MJCF export, MuJoCo's soft wheel-ground contact."""
+"""The thesis bicycle in MuJoCo: its tree from the MJCF export, its soft wheel-ground contact."""
 
 from .engine import MujocoEngine
 

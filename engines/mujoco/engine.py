@@ -40,7 +40,7 @@ import numpy as np
 from reference_model import COORDINATES, Model
 from reference_model.export_mjcf import MjcfSettings, massless_links, mjcf_text
 
-from ..base import Engine, EngineError, EngineUsageError
+from ..base import CapabilityError, Engine, EngineError, EngineUsageError
 
 try:
     import mujoco
@@ -80,8 +80,11 @@ def compile_mjcf(text: str, links: tuple[str, ...]) -> "mujoco.MjModel":
 
 
 class MujocoEngine(Engine):
-    """Mass matrix (CRB), RNE inverse dynamics and gravity from MuJoCo; forward runs with
-    MuJoCo's soft wheel-ground contact (disc-contact models)."""
+    """MuJoCo's CRB mass matrix, RNE inverse dynamics, gravity; runs on its contact (disc only).
+
+    Forward runs use MuJoCo's soft wheel-ground contact, which approximates the rolling-disc
+    contact; on a model with the thesis's fork-axis front contact the instance offers the
+    three terms only."""
 
     name = "mujoco"
     capabilities = frozenset(TERMS | {"simulate"})
@@ -181,9 +184,9 @@ class MujocoEngine(Engine):
 
     def simulate(self, scenario, **options):
         if "simulate" not in self.capabilities:
-            raise EngineUsageError(
-                f"MuJoCo's forward runs approximate the rolling-disc contact; model "
-                f"{self.model.name!r} has the thesis's fork-axis front contact ({self.model.contact!r}); "
-                "use a disc-contact model (thesis-disc, benchmark)")
+            raise CapabilityError(
+                f"engine 'mujoco' cannot simulate model {self.model.name!r}: its forward runs "
+                f"approximate the rolling-disc contact, and this model has the thesis's fork-axis "
+                f"front contact; use a disc-contact model (thesis-disc, benchmark)")
         from .run import simulate
         return simulate(self, scenario, **options)

@@ -35,6 +35,7 @@ What is MuJoCo's and what is ours in a run:
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import time
@@ -94,15 +95,23 @@ class _Bicycle:
     def loads(self, d, T) -> None:
         """Rider torques about body axes (steer z of the fork, pedal y of the rear wheel,
         anti-roll x of the frame, each on its body alone) and the drag at the frame's CoM, as
-        world-frame wrenches on the bodies' CoMs, from d's current kinematics."""
-        x = d.xfrc_applied
-        xm = d.xmat
-        x[self.fork, 3:] = T[0] * xm[self.fork, 2::3]
-        x[self.rear, 3:] = T[1] * xm[self.rear, 1::3]
-        x[self.frame, 3:] = T[2] * xm[self.frame, 0::3]
-        if self.cv:
-            v, _ = self.velocity(d, self.frame, d.xipos[self.frame])
-            x[self.frame, :3] = -self.cv * math.sqrt(float(v @ v)) * v
+        world-frame wrenches on the bodies' CoMs, from d's current kinematics. Plain float
+        arithmetic: this runs every step, and a numpy call on a 3-vector costs ~1-10 us."""
+        T0, T1, T2 = T
+        xm, x, fr = d.xmat, d.xfrc_applied, self.frame
+        a = xm[self.fork].tolist()
+        x[self.fork, 3:] = (T0 * a[2], T0 * a[5], T0 * a[8])
+        a = xm[self.rear].tolist()
+        x[self.rear, 3:] = (T1 * a[1], T1 * a[4], T1 * a[7])
+        a = xm[fr].tolist()
+        if not self.cv:
+            x[fr, 3:] = (T2 * a[0], T2 * a[3], T2 * a[6])
+            return
+        wx, wy, wz, vx, vy, vz = d.cvel[fr].tolist()          # at the root subtree's CoM
+        px, py, pz = (d.xipos[fr] - d.subtree_com[self.root]).tolist()
+        vx, vy, vz = vx + wy * pz - wz * py, vy + wz * px - wx * pz, vz + wx * py - wy * px
+        k = -self.cv * math.sqrt(vx * vx + vy * vy + vz * vz)
+        x[fr] = (k * vx, k * vy, k * vz, T2 * a[0], T2 * a[3], T2 * a[6])
 
     def contact(self, d, b) -> tuple[float, float]:
         """(slip speed m/s, penetration m) of wheel b's disc at its lowest point."""
@@ -119,10 +128,24 @@ class _Bicycle:
         f = np.zeros(6)
         for i in range(d.ncon):
             c = d.contact[i]
-            body = int(m.geom_bodyid[c.geom2]) if m.geom_bodyid[c.geom1] == 0 else int(m.geom_bodyid[c.geom1])
+            g = c.geom2 if m.geom_bodyid[c.geom1] == 0 else c.geom1   # the wheel's geom
+            body = int(m.geom_bodyid[g])
             mujoco.mj_contactForce(m, d, i, f)
             out[body] = out.get(body, 0.0) + float(f[0])
         return out[self.rear], out[self.front]
+
+
+@contextlib.contextmanager
+def _mujoco_warnings():
+    """MuJoCo's warning texts during the block, collected instead of printed (its default
+    handler writes to stdout); the previous handler is restored after."""
+    texts: list[str] = []
+    before = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda text: texts.append(" ".join(str(text).split())))
+    try:
+        yield texts
+    finally:
+        mujoco.set_mju_user_warning(before)
 
 
 def _torque_steps(torque, t_steps) -> np.ndarray:
@@ -193,12 +216,17 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     else:
         T_steps = np.broadcast_to(np.asarray(torque, dtype=float).reshape(3), (n_steps + 1, 3))
 
+    T_list = T_steps.tolist()
     d = mujoco.MjData(m)
     bike = _Bicycle(m, model.params)
     d.qpos[Q_OF_QPOS], d.qvel[Q_OF_QPOS] = init.q, init.dq
     d.time = float(grid[0])
     rk4 = settings.integrator == "RK4"
     warn = [int(getattr(mujoco.mjtWarning, w)) for w in RESET_WARNINGS]
+
+    def reset() -> str:
+        """The reset warnings MuJoCo has counted so far, by name ('' if none)."""
+        return ", ".join(w for w, i in zip(RESET_WARNINGS, warn) if d.warning[i].number)
 
     rows_q, rows_dq, rows_ddq, rows_diag, rows_t, rows_T = [], [], [], [], [], []
 
@@ -215,46 +243,53 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
         rows_diag.append(bike.contact(d, bike.rear) + bike.contact(d, bike.front)
                          + bike.normal_forces(m, d))
 
-    status, message = "completed", "reached the end of the grid"
-    sample(float(grid[0]), T_steps[0])
-    solve0 = time.perf_counter()
-    prev_q, prev_v = d.qpos.copy(), d.qvel.copy()
-    k = 0
-    if abs(d.qpos[THETA_QPOS]) >= fall_limit:
-        status, message = "fell", f"|theta| = {abs(d.qpos[THETA_QPOS]):.3f} rad >= fall limit at the start"
-        n_steps = 0
-    while k < n_steps:
-        prev_q[:], prev_v[:] = d.qpos, d.qvel
-        mujoco.mj_step1(m, d)
-        bike.loads(d, T_steps[k])
-        if rk4:
-            mujoco.mj_step(m, d)
-        else:
-            mujoco.mj_step2(m, d)
-        k += 1
-        if any(d.warning[w].number for w in warn):
-            status = "failed"
-            message = (f"MuJoCo reset the simulation ({', '.join(w for w, i in zip(RESET_WARNINGS, warn) if d.warning[i].number)}"
-                       f") in the step to t = {t_steps[k]:.6f} s; the run ends at the last sample before")
-            break
-        theta = d.qpos[THETA_QPOS]
-        if abs(theta) >= fall_limit:
-            th0 = abs(prev_q[THETA_QPOS])
-            s = (fall_limit - th0) / (abs(theta) - th0) if abs(theta) > th0 else 1.0
-            s = min(max(s, 0.0), 1.0)
-            t_event = t_steps[k - 1] + s * h
-            d.qpos[:] = prev_q + s * (d.qpos - prev_q)
-            d.qvel[:] = prev_v + s * (d.qvel - prev_v)
-            T_event = T_steps[k - 1] + s * (T_steps[k] - T_steps[k - 1])
-            if t_event > rows_t[-1]:
-                sample(float(t_event), T_event)
+    with _mujoco_warnings() as mj_warnings:
+        status, message = "completed", "reached the end of the grid"
+        sample(float(grid[0]), T_steps[0])
+        solve0 = time.perf_counter()
+        prev_q, prev_v = d.qpos.copy(), d.qvel.copy()
+        k = 0
+        if abs(d.qpos[THETA_QPOS]) >= fall_limit:
             status = "fell"
-            message = f"|theta| reached the fall limit {fall_limit:.4f} rad at t = {t_event:.6f} s"
-            break
-        if k % per == 0:
-            sample(float(grid[k // per]), T_steps[k])
-            if progress is not None:
-                progress(float(grid[k // per]))
+            message = f"|theta| = {abs(d.qpos[THETA_QPOS]):.3f} rad >= fall limit at the start"
+            n_steps = 0
+        while k < n_steps:
+            prev_q[:], prev_v[:] = d.qpos, d.qvel
+            mujoco.mj_step1(m, d)
+            bike.loads(d, T_list[k])
+            if rk4:
+                mujoco.mj_step(m, d)
+            else:
+                mujoco.mj_step2(m, d)
+            k += 1
+            theta = d.qpos[THETA_QPOS]
+            at_sample = k % per == 0
+            if (at_sample or abs(theta) >= fall_limit) and reset():
+                # (checked at samples and at a fall only: a reset zeroes the state, so it cannot
+                # fake a fall, and the run is cut at the last sample before it either way)
+                status = "failed"
+                message = (f"MuJoCo reset the simulation ({reset()}) between t = {rows_t[-1]:.6f} and "
+                           f"{t_steps[k]:.6f} s; the run ends at the last sample before"
+                           + (f" (MuJoCo: {mj_warnings[0]})" if mj_warnings else ""))
+                break
+            if abs(theta) >= fall_limit:
+                th0 = abs(prev_q[THETA_QPOS])
+                s = (fall_limit - th0) / (abs(theta) - th0) if abs(theta) > th0 else 1.0
+                s = min(max(s, 0.0), 1.0)
+                t_event = t_steps[k - 1] + s * h
+                d.qpos[:] = prev_q + s * (d.qpos - prev_q)
+                d.qvel[:] = prev_v + s * (d.qvel - prev_v)
+                T_event = T_steps[k - 1] + s * (T_steps[k] - T_steps[k - 1])
+                if t_event > rows_t[-1]:
+                    sample(float(t_event), T_event)
+                status = "fell"
+                message = (f"|theta| reached the fall limit {fall_limit:.4f} rad at "
+                           f"t = {t_event:.6f} s")
+                break
+            if at_sample:
+                sample(float(grid[k // per]), T_steps[k])
+                if progress is not None:
+                    progress(float(grid[k // per]))
     solve_seconds = time.perf_counter() - solve0
 
     qpos = np.array(rows_q)
@@ -262,7 +297,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
         & np.all(np.isfinite(np.array(rows_ddq)), axis=1)
     n = int(np.argmin(ok)) if not ok.all() else len(rows_t)
     if n < len(rows_t):
-        status, message = "failed", f"MuJoCo's state became non-finite after t = {rows_t[n - 1]:.6f} s"
+        status = "failed"
+        message = f"MuJoCo's state became non-finite after t = {rows_t[n - 1]:.6f} s"
         n = max(n, 1)
     t_out = np.array(rows_t[:n])
     q = qpos[:n][:, Q_OF_QPOS]
@@ -280,7 +316,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
                        f"{model.params.R_front:g} m front), half-width "
                        f"{settings.wheel_half_width:g} m, axis = the axle; ground: the plane z = 0"),
             "friction_coefficients": f"sliding {settings.friction:g}, torsional 0, rolling 0",
-            "rear_height_joint": "zc, a slide along z after yc (free: the rear wheel rests on its contact)",
+            "rear_height_joint": ("zc, a slide along z after yc (free: the rear wheel rests on "
+                                  "its contact)"),
             "loads": ("rider torques and drag as xfrc_applied, set each step from mj_step1's "
                       "kinematics" + (" and held over the RK4 stages" if rk4 else "")),
             "fall_limit": fall_limit,
