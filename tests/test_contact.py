@@ -138,3 +138,50 @@ def test_error_at_and_local_orders():
     assert error_at(REF, _drift_run(2.0), 0.5) == pytest.approx(1.0, rel=1e-12)
     # errors 8, 2, 1 at values 4, 2, 1: orders log(4)/log(2) = 2 and 1
     np.testing.assert_allclose(local_orders([4, 2, 1], [8, 2, 1]), [2.0, 1.0], rtol=1e-12)
+
+
+# -- the stage on MuJoCo (quick: four runs of 0.3 s and one of 0.5 s, ~1 s) ---------------------
+
+@pytest.fixture(scope="module")
+def quick_study():
+    from comparisons.stages.mujoco_contact import mujoco_contact
+    return mujoco_contact(quick=True)
+
+
+def test_stage_states_the_contact_settings(quick_study):
+    from reference_model.export_mjcf import MjcfSettings
+    d = MjcfSettings()
+    table = next(b for b in quick_study.blocks if getattr(b, "header", None) == ("setting", "value"))
+    cells = dict(table.rows)
+    assert cells["solref (time constant s, damping ratio)"] == f"{d.solref[0]:g}, {d.solref[1]:g}"
+    assert cells["noslip iterations"] == str(d.noslip_iterations)
+    assert cells["timestep, integrator"] == f"{d.timestep:g} s, {d.integrator}"
+    assert f"cone {d.cone}, condim {d.condim}" in cells["friction"]
+    assert "cylinders" in cells["geometry"]
+
+
+def test_slip_and_error_are_first_order_in_the_contact_time_constant(quick_study):
+    """MuJoCo solves its friction rows for J qacc = -b J qdot with b = 2 / (dmax tc) and leaves
+    out the dJ/dt qdot a rolling point's acceleration needs (its documented constraint model):
+    the rows settle at a slip of that term's size times dmax tc / 2, proportional to tc, and a
+    small slip moves the trajectory in proportion. So with the step at tc / 2 the slip RMS per
+    tc must be one constant (within 10 %: the slip's pattern shifts slightly with the run) and
+    the error's fitted order 1 +- 0.2 (over 8x in tc; measured 1.02)."""
+    study = next(c for c in quick_study.comparisons
+                 if c["quantity"].startswith("contact refinement"))
+    per_tc = np.array(study["slip_rms"]) / np.array(study["values"])
+    assert per_tc.max() / per_tc.min() < 1.1, per_tc
+    assert 0.8 <= study["order"] <= 1.2, study
+    assert study["verdict"] == "approaches ideal rolling"
+
+
+def test_a_wheel_lifts_off_where_ideal_rolling_needs_the_ground_to_pull(quick_study):
+    """MuJoCo's contact is unilateral: a wheel leaves the ground where the reference's
+    bilateral constraint has to pull it down (a negative normal force, from the reference's own
+    multipliers). The two times agree within 0.02 s (two output samples: each is read on the
+    0.01 s grid)."""
+    fid = next(c for c in quick_study.comparisons if c["quantity"].startswith("contact fidelity"))
+    assert fid["lift_off_s"] is not None and fid["ideal_pull_s"] is not None
+    assert abs(fid["lift_off_s"] - fid["ideal_pull_s"]) <= 0.02 + 1e-9, fid
+    # before it, the soft contact stays close to rolling: slip below 1 cm/s, penetration < 1 um
+    assert fid["slip_max"] < 1e-2 and fid["penetration_max"] < 1e-6, fid

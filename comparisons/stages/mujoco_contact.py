@@ -164,6 +164,7 @@ def mujoco_contact(quick: bool) -> Section:
             "tolerance": None, "passed": None, "horizon": f.horizon,
             "slip_max": f.slip_max, "slip_rms": f.slip_rms,
             "penetration_max": f.penetration_max, "penetration_rms": f.penetration_rms,
+            "lift_off_s": lift, "ideal_pull_s": float(ref.t[pull[0]]) if pull.size else None,
             "localized_to": f"slip max {f.slip_max:.1e} m/s ({f.slip_worst})",
             "note": f"{label}; reported, not judged: a declared model difference (soft contact)"})
     sec.table(("up to", "slip max [m/s]", "slip RMS [m/s]", "penetration max [m]",
