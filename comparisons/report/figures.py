@@ -321,8 +321,17 @@ def contact_run(t, error, horizon, slip, penetration, normal, ideal_normal, titl
             ax[3].plot(t, normal[w], color=c, lw=0.9, label=f"{w}: mujoco")
         ax[3].plot(ideal_normal["t"], ideal_normal[w], color=c, ls="--", lw=0.8,
                    label=f"{w}: ideal rolling needs")
+    ax[0].set_ylim(bottom=1e-12)
+    ax[1].set_ylim(bottom=1e-8)
+    # the penetration's scale from the loaded part: a lifted wheel's height would flatten it
+    t_arr = np.asarray(t, dtype=float)
+    loaded = 1e6 * np.concatenate([np.asarray(penetration[w], dtype=float)[t_arr <= horizon]
+                                   for w in colours])
+    if loaded.size:
+        span = max(float(loaded.max() - loaded.min()), 1e-3)
+        ax[2].set_ylim(float(loaded.min()) - 0.5 * span, float(loaded.max()) + 0.5 * span)
     ax[1].set_ylabel("slip speed\n[m/s]")
-    ax[2].set_ylabel("penetration\n[um]")
+    ax[2].set_ylabel("penetration\n[um] (scale: loaded part)")
     ax[3].set_ylabel("normal force\n[N]")
     ax[3].axhline(0.0, color="grey", lw=0.6)
     lo = min(float(np.min(n)) for n in (ideal_normal["rear"], ideal_normal["front"]))

@@ -20,22 +20,24 @@ stability-psid10 (the stability study's fastest run), this stage reports:
   steps), against the timestep at a fixed time constant, and against the time constant at a
   fixed timestep, each with its fitted order (`judgments.contact.refinement_study`).
 
-Measured on this machine (MuJoCo 3.x/4.0, the thesis-disc bicycle, at 0.3 s): the slip RMS is
-1.0 x the time constant (m/s per s) whatever the solimp, impratio, cone, condim or noslip
-iterations; the error shrinks at order ~1 with the time constant and not at all with the step
-alone. MuJoCo's contact rows are solved for J qacc = aref with aref = -b J qdot (b = 2 /
-(dmax tc) for friction), without the term dJ/dt qdot that a rolling point's acceleration needs;
-the friction rows settle where b times the slip balances it, a slip proportional to tc.
+Measured (MuJoCo 4.0.0, thesis-disc, stability-psid10 at 0.3 s): the slip RMS is 1.0 x the
+solref time constant (m/s per s) whatever the solimp, impratio, cone, condim or noslip
+iterations; the error shrinks at order ~1 with the time constant (timestep = tc / 2) and not
+with the step alone. Why: MuJoCo drives each contact row's J qacc toward
+aref = -b J qdot - k r, with b = 2 / (dmax tc) and k = 0 on the friction rows (checked: the
+friction rows' efc_aref equals -b J qdot to all digits); the rolling point's own acceleration
+term dJ/dt qdot is not in it, so the friction rows settle at a slip J qdot = dJ/dt qdot / b,
+proportional to tc. MuJoCo honours tc down to 2 timesteps: the error is first order in the step
+at the closest setting, tc = 2 h.
 """
 
 from __future__ import annotations
 
-import dataclasses
 
 import numpy as np
 
 from engines import load_engine
-from reference_model import COORDINATES, load_model
+from reference_model import load_model
 from reference_model.scenarios import SCENARIOS, torque_input
 
 from ..judgments.contact import contact_fidelity, refinement_study
@@ -238,12 +240,20 @@ def _conclusion(studies, s) -> str:
     by_step = [st for st in studies if st.parameter.startswith("timestep")]
     if by_step:
         st = by_step[0]
-        text += (f" The timestep alone at a fixed {st.held}: {st.verdict} (order "
-                 f"{st.order:.2f}): the contact's time constant, not the integrator, sets the "
-                 "distance to ideal rolling; MuJoCo honours time constants down to two steps, "
-                 "so the closest setting at a given cost is time constant = 2 x timestep.")
-    text += (f" Defaults chosen: timestep {s['timestep']:g} s, solref ({s['solref'][0]:g}, "
-             f"{s['solref'][1]:g}), integrator {s['integrator']}, cone {s['cone']}, condim "
-             f"{s['condim']}, noslip iterations {s['noslip_iterations']}, solimp "
-             f"({', '.join(f'{x:g}' for x in s['solimp'])}).")
+        text += (f" The timestep alone, at a fixed {st.held}: {st.verdict} (order {st.order:.2f};"
+                 f" errors {min(st.errors):.1e} to {max(st.errors):.1e}, where the integrator's "
+                 f"own first-order error and the contact's add or cancel), and the slip stays "
+                 f"{min(st.slip_rms):.2e} to {max(st.slip_rms):.2e} m/s: the step does not remove "
+                 "the contact's departure from rolling.")
+    by_tc = [st for st in studies[1:] if st.parameter.startswith("solref")]
+    if by_tc:
+        st = by_tc[0]
+        text += (f" The time constant alone, at a fixed {st.held}: {st.verdict} (order "
+                 f"{st.order:.2f}; local orders {', '.join(f'{o:.2f}' for o in st.orders)}), down "
+                 "to the integrator's own error at that step.")
+    text += (" MuJoCo honours time constants down to two steps, so the setting closest to ideal "
+             "rolling at a given cost is time constant = 2 x timestep. Defaults chosen: timestep "
+             f"{s['timestep']:g} s, solref ({s['solref'][0]:g}, {s['solref'][1]:g}), integrator "
+             f"{s['integrator']}, cone {s['cone']}, condim {s['condim']}, noslip iterations "
+             f"{s['noslip_iterations']}, solimp ({', '.join(f'{x:g}' for x in s['solimp'])}).")
     return text
