@@ -143,6 +143,7 @@ def environment(setups) -> dict:
     """What the numbers depend on (no times, no dates: those are in timings.json)."""
     from ..judgments.convergence import DEFAULT_STEPS, REFERENCE_RTOL
     from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP
+    from . import mujoco_contact as mc
     return {
         "packages": _versions(),
         "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "arch": platform.machine(),
@@ -150,7 +151,9 @@ def environment(setups) -> dict:
         "solvers": {s.label: s.settings for s in setups},
         "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(DEFAULT_STEPS),
                   "convergence_horizon_s": CONVERGENCE_HORIZON,
-                  "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01},
+                  "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01,
+                  "mujoco_contact_study": {"scenario": mc.SCENARIO, "model": mc.MODEL,
+                                           "at_time_s": mc.STUDY_TIME, "window_s": mc.WINDOW}},
         "run_times": "timings.json (kept apart: they vary from run to run)",
     }
 
