@@ -52,7 +52,7 @@ DEFAULTS = MjcfSettings()
 TERMS = frozenset({"mass_matrix", "inverse_dynamics", "gravity"})
 
 
-def _tuple_option(name: str, value):
+def tuple_option(name: str, value):
     """solref/solimp as given: a sequence, or text with commas or spaces (the CLI's)."""
     if isinstance(value, str):
         parts = value.replace(",", " ").split()
@@ -100,8 +100,8 @@ class MujocoEngine(Engine):
         super().__init__(model)
         try:
             self.settings = MjcfSettings(
-                timestep=timestep, integrator=integrator, solref=_tuple_option("solref", solref),
-                solimp=_tuple_option("solimp", solimp), friction=friction, cone=cone,
+                timestep=timestep, integrator=integrator, solref=tuple_option("solref", solref),
+                solimp=tuple_option("solimp", solimp), friction=friction, cone=cone,
                 condim=condim, noslip_iterations=noslip_iterations, solver=solver,
                 iterations=iterations, tolerance=tolerance, wheel_half_width=wheel_half_width)
         except (TypeError, ValueError) as exc:

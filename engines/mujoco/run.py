@@ -47,6 +47,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
+from .engine import tuple_option
 
 import mujoco
 
@@ -180,18 +181,17 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
                                f"takes fall_limit, t_end, progress and "
                                f"{', '.join(MjcfSettings.field_names())}")
     if options:
-        from .engine import _tuple_option
         for k in ("solref", "solimp"):
             if k in options:
-                options[k] = _tuple_option(k, options[k])
+                options[k] = tuple_option(k, options[k])
         try:
             settings = dataclasses.replace(engine.settings, **options)
         except (TypeError, ValueError) as exc:
             raise EngineUsageError(f"MuJoCo option: {exc}") from None
-        text, m = engine.run_model(settings)
+        _, m = engine.run_model(settings)
     else:
         settings = engine.settings
-        text, m = engine.run_model()
+        _, m = engine.run_model()
     if not (isinstance(fall_limit, (int, float)) and math.isfinite(fall_limit) and fall_limit > 0):
         raise EngineUsageError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
     fall_limit = float(fall_limit)
