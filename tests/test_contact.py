@@ -185,3 +185,19 @@ def test_a_wheel_lifts_off_where_ideal_rolling_needs_the_ground_to_pull(quick_st
     assert abs(fid["lift_off_s"] - fid["ideal_pull_s"]) <= 0.02 + 1e-9, fid
     # before it, the soft contact stays close to rolling: slip below 1 cm/s, penetration < 1 um
     assert fid["slip_max"] < 1e-2 and fid["penetration_max"] < 1e-6, fid
+
+
+def test_disc_claims_replace_only_mujocos_entries():
+    from comparisons.stages.mujoco_contact import ON_DISC, DiscClaims, merge_claims
+    from comparisons.stages.results import Section
+    base = [{"claim_id": "stability-psid10", "engine": e, "verdict": v, "evidence": "x"}
+            for e, v in (("reference", "partly"), ("mujoco", "not assessed"))]
+    base.append({"claim_id": "check-pedal-torque", "engine": "mujoco", "verdict": "not assessed",
+                 "evidence": "y"})
+    disc = DiscClaims([{"claim_id": "stability-psid10", "engine": "mujoco", "verdict": "partly",
+                        "evidence": ON_DISC + "fell at 1.692 s"}], Section("s"))
+    out = merge_claims(base, disc)
+    assert [(c["engine"], c["claim_id"], c["verdict"]) for c in out] == [
+        ("reference", "stability-psid10", "partly"), ("mujoco", "stability-psid10", "partly"),
+        ("mujoco", "check-pedal-torque", "not assessed")]
+    assert out[1]["evidence"].startswith("on thesis-disc") and out[0]["evidence"] == "x"

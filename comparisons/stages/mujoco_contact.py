@@ -33,6 +33,7 @@ at the closest setting, tc = 2 h.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -257,3 +258,58 @@ def _conclusion(studies, s) -> str:
              f"{s['integrator']}, cone {s['cone']}, condim {s['condim']}, noslip iterations "
              f"{s['noslip_iterations']}, solimp ({', '.join(f'{x:g}' for x in s['solimp'])}).")
     return text
+
+
+# -- the thesis's claims on MuJoCo ---------------------------------------------------------------
+
+ON_DISC = ("on thesis-disc (MuJoCo has no thesis fork-axis contact; the claim judged on its run "
+           "of the same scenario with the disc contact): ")
+
+
+@dataclass
+class DiscClaims:
+    """The stability claims judged on MuJoCo's and the reference's thesis-disc runs."""
+
+    claims: list[dict]       # judge_claims entries for 'mujoco', evidence prefixed ON_DISC
+    section: Section
+
+
+def claims_on_disc(names: tuple[str, ...]) -> DiscClaims:
+    """The stability scenarios among ``names`` on MuJoCo (defaults) and on the reference, both
+    on thesis-disc, and the thesis's claims that need them judged on each (`judge_claims`)."""
+    from engines.runs import run_scenario
+
+    from ..judgments.claims import judge_claims
+    model = load_model(MODEL)
+    stab = [n for n in names if n.startswith("stability-")]
+    runs = {}
+    for n in stab:
+        sc = SCENARIOS[n]
+        runs[("mujoco", n)] = run_scenario("mujoco", load_engine("mujoco", model), model, sc,
+                                           ("forward",))
+        runs[("reference", n)] = run_scenario("reference", load_engine("reference", model), model,
+                                              sc, ("forward",))
+    judged = [c for c in judge_claims(runs, ["reference", "mujoco"], model, stab)
+              if c["claim_id"].startswith("stability-")]
+    sec = Section("MuJoCo on thesis-disc: the thesis's stability claims")
+    sec.text("MuJoCo cannot run the thesis's fork-axis contact, so the stability claims are judged "
+             "on its runs of the same scenarios with the disc contact (`thesis-disc`, the engine's "
+             "defaults), beside the reference's runs on `thesis-disc` (DOP853, the scenario's "
+             "Baumgarte constraint handling) for comparison. The runs leave the reference "
+             "within its first half second wherever the steer whips a wheel off the ground (see "
+             "the contact study): the verdicts say what MuJoCo's bicycle does, not how closely it "
+             "follows the reference.")
+    by = {(c["claim_id"], c["engine"]): c for c in judged}
+    ids = list(dict.fromkeys(c["claim_id"] for c in judged))
+    sec.table(("claim", "reference thesis-disc", "mujoco thesis-disc"),
+              [(next(c["claim"] for c in judged if c["claim_id"] == i),
+                f"{by[(i, 'reference')]['verdict']}: {by[(i, 'reference')]['evidence']}",
+                f"{by[(i, 'mujoco')]['verdict']}: {by[(i, 'mujoco')]['evidence']}") for i in ids])
+    mine = [dict(c, evidence=ON_DISC + c["evidence"]) for c in judged if c["engine"] == "mujoco"]
+    return DiscClaims(mine, sec)
+
+
+def merge_claims(claims: list[dict], disc: DiscClaims) -> list[dict]:
+    """``claims`` with MuJoCo's entries replaced by their thesis-disc judgments where made."""
+    new = {c["claim_id"]: c for c in disc.claims}
+    return [new.get(c["claim_id"], c) if c["engine"] == "mujoco" else c for c in claims]

@@ -220,6 +220,10 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
     if "mujoco" in opts.engines and "contact" in want:
         tasks.append(Task("mujoco-contact", mujoco_contact.mujoco_contact, (quick,),
                           1.5 if quick else 3.0, "MuJoCo contact study"))
+        stab = tuple(n for n in opts.scenarios if n.startswith("stability-"))
+        if stab:
+            tasks.append(Task("mujoco-claims", mujoco_contact.claims_on_disc, (stab,),
+                              0.4 * len(stab), "MuJoCo: the stability claims on thesis-disc"))
     if "pinocchio" in opts.engines and "exudyn" in opts.engines and "benchmark" in want:
         builds = benchmark.QUICK_BUILDS if quick else benchmark.BUILDS
         tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (quick,), 1.5,
@@ -335,6 +339,12 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
     add("exudyn-convergence", "Exudyn convergence")
     add("energy", "Energy drift")
     add("mujoco-contact", "MuJoCo contact study")
+    if "mujoco-claims" in done:
+        from .mujoco_contact import merge_claims
+        disc_claims, failed_claims = value("mujoco-claims", "MuJoCo claims on thesis-disc")
+        if failed_claims is None:
+            claims = merge_claims(claims, disc_claims)
+        sections.append(failed_claims or disc_claims.section)
     if "benchmark-terms" in done:
         bench_runs = [value(("benchmark", n), f"benchmark {n}") for n in benchmark.MANOEUVRES]
         terms, failed_terms = value("benchmark-terms", "benchmark terms")
