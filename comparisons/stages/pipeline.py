@@ -221,7 +221,7 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
         tasks.append(Task("mujoco-contact", mujoco_contact.mujoco_contact, (quick,),
                           1.5 if quick else 3.0, "MuJoCo contact study"))
         stab = tuple(n for n in opts.scenarios if n.startswith("stability-"))
-        if stab:
+        if stab and not quick:   # ~2 s of runs: the full report only
             tasks.append(Task("mujoco-claims", mujoco_contact.claims_on_disc, (stab,),
                               0.4 * len(stab), "MuJoCo: the stability claims on thesis-disc"))
     if "pinocchio" in opts.engines and "exudyn" in opts.engines and "benchmark" in want:
