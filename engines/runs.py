@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .base import CapabilityError
+
 
 @dataclass
 class Run:
@@ -65,6 +67,10 @@ def run_scenario(label: str, engine, model, scenario, kinds=("inverse", "forward
                        time.perf_counter() - t0, m.t, m.q, m.dq, res.T, res.lam,
                        ddq=getattr(res, "ddq", None))
         traj = engine.simulate(scenario)
+    except CapabilityError as exc:   # declared by the engine for this model: not a failure
+        return Run(label, scenario.name, model.name, scenario.kind, "not run",
+                   f"declared model difference: {' '.join(str(exc).split())}",
+                   time.perf_counter() - t0)
     except Exception as exc:   # an engine failure is a result, reported with its message
         return Run(label, scenario.name, model.name, scenario.kind, "failed",
                    f"{type(exc).__name__}: {' '.join(str(exc).split())}", time.perf_counter() - t0)

@@ -24,7 +24,7 @@ def report(quick_report):
 
 def test_summary_carries_the_contract_keys(report):
     _, summary = report
-    assert summary["engines"] == ["reference", "pinocchio", "exudyn"]
+    assert summary["engines"] == ["reference", "pinocchio", "exudyn", "mujoco"]
     assert {"comparisons", "claims", "faults", "environment"} <= set(summary)
     assert summary["comparisons"], "no engine comparison in the summary"
     for c in summary["comparisons"]:
@@ -37,9 +37,17 @@ def test_summary_carries_the_contract_keys(report):
     setups = ("reference", "pinocchio", "exudyn-tree")
     claims = {(c["claim_id"], c["engine"]): c for c in summary["claims"]}
     assert len(claims) == len(summary["claims"])
-    assert set(claims) == {(cid, e) for e in setups for cid in
+    assert set(claims) == {(cid, e) for e in setups + ("mujoco",) for cid in
                            ("check-pedal-torque", "replay-identical", "stability-psid10")}
     runs = {(r["engine"], r["scenario"]): r for r in summary["engine_runs"]}
+    # MuJoCo has no thesis (fork-axis) front contact: its runs of the thesis's scenarios are
+    # 'not run', a declared model difference, and (without the contact section, which judges
+    # the stability claims on its thesis-disc runs) its claims not assessed, not failed
+    for sc in ("check-forward", "stability-psid10"):
+        assert runs[("mujoco", sc)]["status"] == "not run"
+        assert "declared model difference" in runs[("mujoco", sc)]["message"]
+    assert {claims[(cid, "mujoco")]["verdict"] for cid in
+            ("check-pedal-torque", "replay-identical", "stability-psid10")} == {"not assessed"}
     for e in setups:
         # the replay is not in the quick subset: its claim is listed, and not assessed
         c = claims[("replay-identical", e)]

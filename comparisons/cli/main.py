@@ -276,13 +276,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--engines", default=None,
                    help="comma-separated engines to compare with the reference: names (see "
                         "'bicycle-xval engines') or specs package.module:Class, path/file.py:Class "
-                        "[reference,pinocchio,exudyn]")
+                        "[reference,pinocchio,exudyn,mujoco]")
     from .engines import add_engine_option_argument as _add_opt
     _add_opt(s)
     s.add_argument("--quick", action="store_true", help="a fast subset")
     s.add_argument("--sections", default=None,
                    help="engine sections besides the scenarios, comma-separated: terms, exudyn, "
-                        "benchmark, faults, or none [all]")
+                        "benchmark, faults, contact (MuJoCo's contact study), or none [all]")
     s.add_argument("--no-data", action="store_true",
                    help="do not write data/<scenario>_<engine>.csv (the runs' samples)")
     s.add_argument("--no-html", action="store_true",

@@ -306,10 +306,65 @@ def replay_vs_zigzag(zigzag, replays):
     return fig
 
 
+def contact_run(t, error, horizon, slip, penetration, normal, ideal_normal, title):
+    """A soft-contact run against ideal rolling: error, slip, penetration, normal forces."""
+    plt = _plt()
+    fig, ax = plt.subplots(4, 1, figsize=(WIDTH, 8.4), sharex=True)
+    _semilogy(ax[0], error["t"], error["max"], color="k", lw=1.0, label="max over q [rad or m]")
+    _semilogy(ax[0], error["t"], error["theta"], color="tab:red", lw=0.8, label="theta [rad]")
+    ax[0].set_ylabel("|mujoco - ref|\n[rad or m]")
+    colours = {"rear": "tab:blue", "front": "tab:orange"}
+    for w, c in colours.items():
+        _semilogy(ax[1], t, slip[w], color=c, lw=0.9, label=w)
+        ax[2].plot(t, 1e6 * np.asarray(penetration[w]), color=c, lw=0.9, label=w)
+        if normal.get(w) is not None:
+            ax[3].plot(t, normal[w], color=c, lw=0.9, label=f"{w}: mujoco")
+        ax[3].plot(ideal_normal["t"], ideal_normal[w], color=c, ls="--", lw=0.8,
+                   label=f"{w}: ideal rolling needs")
+    ax[0].set_ylim(bottom=1e-12)
+    ax[1].set_ylim(bottom=1e-8)
+    # the penetration's scale from the loaded part: a lifted wheel's height would flatten it
+    t_arr = np.asarray(t, dtype=float)
+    loaded = 1e6 * np.concatenate([np.asarray(penetration[w], dtype=float)[t_arr <= horizon]
+                                   for w in colours])
+    if loaded.size:
+        span = max(float(loaded.max() - loaded.min()), 1e-3)
+        ax[2].set_ylim(float(loaded.min()) - 0.5 * span, float(loaded.max()) + 0.5 * span)
+    ax[1].set_ylabel("slip speed\n[m/s]")
+    ax[2].set_ylabel("penetration\n[um] (scale: loaded part)")
+    ax[3].set_ylabel("normal force\n[N]")
+    ax[3].axhline(0.0, color="grey", lw=0.6)
+    lo = min(float(np.min(n)) for n in (ideal_normal["rear"], ideal_normal["front"]))
+    ax[3].set_ylim(max(lo, -2000.0) - 50, 2500)
+    for a in ax:
+        a.axvline(horizon, color="grey", lw=0.8, ls=":")
+        a.grid(True, lw=0.3)
+        a.legend(fontsize=7, ncol=4)
+    ax[-1].set_xlabel(f"t [s] (dotted: last time both wheels carry load, {horizon:.2f} s)")
+    ax[0].set_title(title)
+    return fig
+
+
+def refinement(curves, at_time, title):
+    """Errors against a refined contact parameter, log-log, with a first-order guide."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(WIDTH * 0.75, 4.2))
+    for c in curves:
+        ax.loglog(c["values"], c["errors"], "o-", label=c["label"])
+    v = np.array(curves[0]["values"])
+    e = np.array(curves[0]["errors"])
+    ax.loglog(v, e[-1] * v / v[-1], "k--", lw=0.8, label="slope 1 (first order)")
+    ax.set_xlabel("refined value (time constant or timestep) [s]")
+    ax.set_ylabel(f"max error at {at_time:g} s [rad or m]")
+    ax.set_title(title)
+    ax.legend(fontsize=7)
+    return fig
+
+
 DRAWINGS: dict[str, Callable] = {f.__name__: f for f in (
     matrix_error, error_vs_time, convergence, lean_panels, error_panels, nonlinear_fits,
     eigenvalues, torque_overlay, trajectory_overlay, constraint_residuals, stability_study,
-    replay_vs_zigzag)}
+    replay_vs_zigzag, contact_run, refinement)}
 
 
 def png_bytes(fig) -> bytes:

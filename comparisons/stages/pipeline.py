@@ -7,6 +7,8 @@ Stages (each a top-level call, run in worker processes by `pool.run_tasks`, long
 * the engine sections: Pinocchio and Exudyn's tree term by term, Exudyn's trajectories per
   scenario, its convergence order, the energy drift (`engines`);
 * the benchmark bicycle: terms, each IFToMM manoeuvre, Exudyn's convergence (`benchmark`);
+* MuJoCo's contact study on thesis-disc: slip, penetration, error against time, refinement
+  against the contact's time constant and the timestep (`mujoco_contact`);
 * the fault-injection suite, per engine (`faults`).
 
 With ``--model`` (`Options.models`) the scenarios run as cases bound to each model
@@ -43,8 +45,10 @@ from .results import Section
 
 QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
 #: the parts of a run besides the scenarios, selectable with --sections (all by default)
-SECTIONS = ("terms", "exudyn", "benchmark", "faults")
-ENGINE_NAMES = ("reference", "pinocchio", "exudyn")
+SECTIONS = ("terms", "exudyn", "benchmark", "faults", "contact")
+ENGINE_NAMES = ("reference", "pinocchio", "exudyn", "mujoco")
+#: engines whose terms have a section of their own (the others get `engines.plugin_terms`)
+OWN_TERMS = ("reference", "pinocchio", "exudyn")
 
 
 class SelectionError(ValueError):
@@ -117,7 +121,7 @@ def select(scenarios: str | None, quick: bool, engines: str | None) -> Options:
 
 def _versions() -> dict:
     out = {"python": sys.version.split()[0]}
-    for pkg in ("numpy", "scipy", "sympy", "pandas", "matplotlib", "pin", "exudyn"):
+    for pkg in ("numpy", "scipy", "sympy", "pandas", "matplotlib", "pin", "exudyn", "mujoco"):
         try:
             out[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
@@ -139,6 +143,7 @@ def environment(setups) -> dict:
     """What the numbers depend on (no times, no dates: those are in timings.json)."""
     from ..judgments.convergence import DEFAULT_STEPS, REFERENCE_RTOL
     from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP
+    from . import mujoco_contact as mc
     return {
         "packages": _versions(),
         "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "arch": platform.machine(),
@@ -146,7 +151,9 @@ def environment(setups) -> dict:
         "solvers": {s.label: s.settings for s in setups},
         "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(DEFAULT_STEPS),
                   "convergence_horizon_s": CONVERGENCE_HORIZON,
-                  "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01},
+                  "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01,
+                  "mujoco_contact_study": {"scenario": mc.SCENARIO, "model": mc.MODEL,
+                                           "at_time_s": mc.STUDY_TIME, "window_s": mc.WINDOW}},
         "run_times": "timings.json (kept apart: they vary from run to run)",
     }
 
@@ -154,7 +161,7 @@ def environment(setups) -> dict:
 # -- the stages ----------------------------------------------------------------------------------
 
 def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task]:
-    from . import benchmark, engines, faults, scenarios, stability
+    from . import benchmark, engines, faults, mujoco_contact, scenarios, stability
     from .runs import cost, run_one, setups_for
     setups = {s.label: s for s in setups_for(opts.engines, opts.options_for())}
     # the built-in scenarios by name (today's run, unchanged); the others as objects + model
@@ -206,10 +213,17 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
                           5.0 if quick else 8.0, "Exudyn convergence order"))
         tasks.append(Task("energy", engines.energy_section, (), 2.0, "energy drift"))
     for spec in opts.engines:
-        if spec not in ENGINE_NAMES and "terms" in want:   # a plugin: its declared terms
+        if spec not in OWN_TERMS and "terms" in want:   # a plugin or MuJoCo: its declared terms
             tasks.append(Task(("plugin-terms", spec), engines.plugin_terms,
                               (spec, opts.options_for().get(spec, {}), 50 if quick else 200), 1.5,
                               f"{spec} term by term"))
+    if "mujoco" in opts.engines and "contact" in want:
+        tasks.append(Task("mujoco-contact", mujoco_contact.mujoco_contact, (quick,),
+                          1.5 if quick else 3.0, "MuJoCo contact study"))
+        stab = tuple(n for n in opts.scenarios if n.startswith("stability-"))
+        if stab and not quick:   # ~2 s of runs: the full report only
+            tasks.append(Task("mujoco-claims", mujoco_contact.claims_on_disc, (stab,),
+                              0.4 * len(stab), "MuJoCo: the stability claims on thesis-disc"))
     if "pinocchio" in opts.engines and "exudyn" in opts.engines and "benchmark" in want:
         builds = benchmark.QUICK_BUILDS if quick else benchmark.BUILDS
         tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (quick,), 1.5,
@@ -324,6 +338,13 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         sections += failures
     add("exudyn-convergence", "Exudyn convergence")
     add("energy", "Energy drift")
+    add("mujoco-contact", "MuJoCo contact study")
+    if "mujoco-claims" in done:
+        from .mujoco_contact import merge_claims
+        disc_claims, failed_claims = value("mujoco-claims", "MuJoCo claims on thesis-disc")
+        if failed_claims is None:
+            claims = merge_claims(claims, disc_claims)
+        sections.append(failed_claims or disc_claims.section)
     if "benchmark-terms" in done:
         bench_runs = [value(("benchmark", n), f"benchmark {n}") for n in benchmark.MANOEUVRES]
         terms, failed_terms = value("benchmark-terms", "benchmark terms")

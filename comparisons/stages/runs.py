@@ -9,6 +9,8 @@ An *engine setup* is an engine with its options, labelled as the report names it
 | pinocchio    | pinocchio  | the same solvers on Pinocchio's M, RNEA and contact kinematics       |
 | exudyn-tree  | exudyn     | forward only: kinematic tree, generalized-alpha, h = 1e-3 s, the     |
 |              |            | model's own front contact (user constraints for the thesis contact) |
+| mujoco       | mujoco     | forward only, disc-contact models: MuJoCo's soft contact, h = 1e-4 s;  |
+|              |            | 'not run' on the thesis contact (a declared model difference)        |
 
 `run_one` is a top-level function of (label, scenario, model spec), so the pipeline farms runs out to
 worker processes: the report's numbers do not depend on the order or the process they ran in.
@@ -19,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from engines.runs import Run, run_scenario
+from reference_model.export_mjcf import MjcfSettings
 
 EXUDYN_STEP = 1e-3
 
@@ -51,8 +54,15 @@ SETUPS: dict[str, EngineSetup] = {s.label: s for s in (
                 settings=f"ObjectKinematicTree, generalized-alpha (spectral radius 0.9, index 3), "
                          f"h = {EXUDYN_STEP:g} s, Newton tolerance 1e-10; no inverse dynamics"),
 )}
+_MJ = MjcfSettings()
+SETUPS["mujoco"] = EngineSetup(
+    "mujoco", "mujoco", kinds=("forward",),
+    settings=f"MuJoCo's own soft wheel-ground contact (disc-contact models only): cylinders on "
+             f"a plane, {_MJ.cone} cone, condim {_MJ.condim}, solref "
+             f"({_MJ.solref[0]:g} s, {_MJ.solref[1]:g}), timestep {_MJ.timestep:g} s, "
+             f"{_MJ.integrator}: the contact study's closest to ideal rolling; no inverse dynamics")
 ENGINE_SETUPS = {"reference": ("reference",), "pinocchio": ("pinocchio",),
-                 "exudyn": ("exudyn-tree",)}
+                 "exudyn": ("exudyn-tree",), "mujoco": ("mujoco",)}
 
 
 def label_of(spec: str) -> str:
@@ -113,6 +123,6 @@ def cost(label: str, scenario: str) -> float:
     scenario = scenario.split("-on-")[0]
     if scenario in ("check", "zigzag"):
         return 0.1 if label == "reference" else 0.8
-    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6}.get(label, 1.0)
+    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6, "mujoco": 0.35}.get(label, 1.0)
     length = 6.3 if scenario in ("replay", "check-forward") else 1.2
     return per_second * length

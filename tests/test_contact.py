@@ -1,0 +1,203 @@
+"""The contact-fidelity judgments (comparisons/judgments/contact.py) on synthetic trajectories
+whose answers are known in closed form: slip and penetration statistics of given signals, and
+refinement studies whose errors are exactly C v^p (order p)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from comparisons.judgments.contact import (contact_fidelity, error_at, local_orders,
+                                           refinement_study)
+from reference_model.solvers import Trajectory
+
+DT = 0.01
+T = np.round(np.arange(0, 101) * DT, 12)      # 0 .. 1 s on the 0.01 s grid
+
+
+def _traj(t, q, diagnostics=None):
+    t = np.asarray(t, dtype=float)
+    q = np.asarray(q, dtype=float)
+    z = np.zeros_like(q)
+    return Trajectory(t=t, q=q, dq=z, ddq=z, C=np.zeros((t.size, 5)), T=np.zeros((t.size, 3)),
+                      status="completed", message="", t_end=float(t[-1]),
+                      diagnostics=diagnostics or {})
+
+
+def _diag(n, slip_rear=None, slip_front=None, pen_rear=None, pen_front=None):
+    zero = np.zeros(n)
+    return {"slip_speed_rear": zero if slip_rear is None else slip_rear,
+            "slip_speed_front": zero if slip_front is None else slip_front,
+            "penetration_rear": zero if pen_rear is None else pen_rear,
+            "penetration_front": zero if pen_front is None else pen_front}
+
+
+REF = _traj(T, np.zeros((T.size, 8)))
+
+
+def _drift_run(c, t=T, diagnostics=None):
+    """A run whose yc drifts as c t (a constant lateral slip of c m/s)."""
+    q = np.zeros((t.size, 8))
+    q[:, 1] = c * t
+    return _traj(t, q, diagnostics)
+
+
+# -- slip, penetration, error against time ------------------------------------------------------
+
+def test_fidelity_statistics_of_known_signals():
+    # rear slip A |sin(2 pi t)| over 100 samples of one period (t = 0 .. 0.99; the sample at
+    # 1.0 is past the horizon): the mean of sin^2 over a whole number of periods sampled
+    # uniformly (N > 2) is exactly 1/2, so the RMS over both wheels (front zero) is
+    # sqrt((A^2 / 2 + 0) / 2) = A / 2; the max A is at t = 0.25.
+    A = 3e-4
+    slip = A * np.abs(np.sin(2 * np.pi * T))
+    pen_r = np.full(T.size, 1e-6)
+    pen_f = np.zeros(T.size)
+    pen_f[40] = 3e-6                                   # one sample at t = 0.40 s
+    run = _drift_run(2e-3, diagnostics=_diag(T.size, slip_rear=slip, pen_rear=pen_r,
+                                             pen_front=pen_f))
+    fid = contact_fidelity(REF, run, horizon=0.99)
+    assert fid.horizon == pytest.approx(0.99)
+    assert fid.slip_max == pytest.approx(A, rel=1e-12)
+    assert fid.slip_worst == "rear at 0.25 s"
+    assert fid.slip_rms == pytest.approx(A / 2, rel=1e-12)
+    assert fid.penetration_max == pytest.approx(3e-6, rel=1e-12)
+    assert fid.penetration_worst == "front at 0.40 s"
+    # RMS over 2 x 100 samples: 100 of 1e-6, one of 3e-6, the rest 0
+    assert fid.penetration_rms == pytest.approx(math.sqrt((100e-12 + 9e-12) / 200), rel=1e-12)
+    # the trajectory error is the drift 2e-3 t, largest at the horizon
+    assert fid.error_end == pytest.approx(2e-3 * 0.99, rel=1e-12)
+    assert fid.error_max == pytest.approx(2e-3 * 0.99, rel=1e-12)
+    np.testing.assert_allclose(fid.error["yc"], 2e-3 * T[:100], rtol=0, atol=1e-18)
+
+
+def test_fidelity_ignores_what_lies_beyond_the_horizon():
+    slip = np.zeros(T.size)
+    slip[-1] = 5.0                                     # a spike at 1.0 s, past the horizon
+    fid = contact_fidelity(REF, _drift_run(0.0, diagnostics=_diag(T.size, slip_front=slip)),
+                           horizon=0.5)
+    assert fid.slip_max == 0.0 and fid.horizon == pytest.approx(0.5)
+    assert contact_fidelity(REF, _drift_run(0.0, diagnostics=_diag(T.size, slip_front=slip))
+                            ).slip_max == 5.0            # no horizon: the whole run
+
+
+def test_fidelity_needs_the_diagnostics():
+    with pytest.raises(ValueError, match="slip_speed_rear"):
+        contact_fidelity(REF, _drift_run(1e-3))
+    bad = _diag(T.size)
+    bad["penetration_front"] = np.zeros(3)
+    with pytest.raises(ValueError, match="penetration_front.*one value per sample"):
+        contact_fidelity(REF, _drift_run(1e-3, diagnostics=bad))
+
+
+# -- refinement studies with errors C v^p --------------------------------------------------------
+
+VALUES = (2e-3, 1e-3, 5e-4, 2.5e-4)          # spans 8x, as convergence.MIN_SPAN asks
+
+
+@pytest.mark.parametrize("p", [1.0, 2.0])
+def test_refinement_recovers_the_order_of_errors_c_v_p(p):
+    # a run at value v drifts as 40 v^p t, so its error at 0.3 s is 12 v^p exactly: the fitted
+    # line through log e = p log v + log 12 has slope p (to round-off of logs, 1e-9)
+    runs = [(v, _drift_run(40 * v ** p)) for v in VALUES]
+    s = refinement_study(REF, runs, "solref time constant [s]", at_time=0.3)
+    assert s.values == tuple(sorted(VALUES, reverse=True))
+    np.testing.assert_allclose(s.errors, [12 * v ** p for v in s.values], rtol=1e-12)
+    assert s.order == pytest.approx(p, abs=1e-9)
+    assert s.intercept == pytest.approx(math.log(12), abs=1e-8)
+    np.testing.assert_allclose(s.orders, [p] * 3, atol=1e-9)
+    assert s.verdict == "approaches ideal rolling"
+    assert math.isnan(s.slip_rms[0])                  # the synthetic runs have no diagnostics
+
+
+def test_refinement_reports_an_error_that_does_not_shrink():
+    # the same error at every value (order 0): whatever limits it is not the refined parameter
+    runs = [(v, _drift_run(1e-2 * (1 + 0.01 * k))) for k, v in enumerate(VALUES)]
+    s = refinement_study(REF, runs, "timestep [s]", at_time=0.3)
+    assert abs(s.order) < 0.05
+    assert s.verdict == "does not approach"
+
+
+def test_refinement_needs_a_span_to_judge():
+    runs = [(v, _drift_run(40 * v)) for v in (2e-3, 1e-3)]     # 2x: too narrow
+    s = refinement_study(REF, runs, "timestep [s]", at_time=0.3)
+    assert s.order == pytest.approx(1.0, abs=1e-9)
+    assert s.verdict == "inconclusive"
+
+
+def test_refinement_refuses_a_run_that_stops_before_the_time():
+    short = _drift_run(1e-3, t=T[:21])                         # ends at 0.2 s
+    with pytest.raises(ValueError, match=r"= 0.0005: .*t = 0.3 s"):
+        refinement_study(REF, [(1e-3, _drift_run(1e-3)), (5e-4, short)], "timestep [s]",
+                         at_time=0.3)
+    with pytest.raises(ValueError, match="at least 2 runs"):
+        refinement_study(REF, [(1e-3, _drift_run(1e-3))], "timestep [s]", at_time=0.3)
+
+
+def test_error_at_and_local_orders():
+    assert error_at(REF, _drift_run(2.0), 0.5) == pytest.approx(1.0, rel=1e-12)
+    # errors 8, 2, 1 at values 4, 2, 1: orders log(4)/log(2) = 2 and 1
+    np.testing.assert_allclose(local_orders([4, 2, 1], [8, 2, 1]), [2.0, 1.0], rtol=1e-12)
+
+
+# -- the stage on MuJoCo (quick: four runs of 0.3 s and one of 0.5 s, ~1 s) ---------------------
+
+@pytest.fixture(scope="module")
+def quick_study():
+    from comparisons.stages.mujoco_contact import mujoco_contact
+    return mujoco_contact(quick=True)
+
+
+def test_stage_states_the_contact_settings(quick_study):
+    from reference_model.export_mjcf import MjcfSettings
+    d = MjcfSettings()
+    table = next(b for b in quick_study.blocks if getattr(b, "header", None) == ("setting", "value"))
+    cells = dict(table.rows)
+    assert cells["solref (time constant s, damping ratio)"] == f"{d.solref[0]:g}, {d.solref[1]:g}"
+    assert cells["noslip iterations"] == str(d.noslip_iterations)
+    assert cells["timestep, integrator"] == f"{d.timestep:g} s, {d.integrator}"
+    assert f"cone {d.cone}, condim {d.condim}" in cells["friction"]
+    assert "cylinders" in cells["geometry"]
+
+
+def test_slip_and_error_are_first_order_in_the_contact_time_constant(quick_study):
+    """MuJoCo solves its friction rows for J qacc = -b J qdot with b = 2 / (dmax tc) and leaves
+    out the dJ/dt qdot a rolling point's acceleration needs (its documented constraint model):
+    the rows settle at a slip of that term's size times dmax tc / 2, proportional to tc, and a
+    small slip moves the trajectory in proportion. So with the step at tc / 2 the slip RMS per
+    tc must be one constant (within 10 %: the slip's pattern shifts slightly with the run) and
+    the error's fitted order 1 +- 0.2 (over 8x in tc; measured 1.02)."""
+    study = next(c for c in quick_study.comparisons
+                 if c["quantity"].startswith("contact refinement"))
+    per_tc = np.array(study["slip_rms"]) / np.array(study["values"])
+    assert per_tc.max() / per_tc.min() < 1.1, per_tc
+    assert 0.8 <= study["order"] <= 1.2, study
+    assert study["verdict"] == "approaches ideal rolling"
+
+
+def test_a_wheel_lifts_off_where_ideal_rolling_needs_the_ground_to_pull(quick_study):
+    """MuJoCo's contact is unilateral: a wheel leaves the ground where the reference's
+    bilateral constraint has to pull it down (a negative normal force, from the reference's own
+    multipliers). The two times agree within 0.02 s (two output samples: each is read on the
+    0.01 s grid)."""
+    fid = next(c for c in quick_study.comparisons if c["quantity"].startswith("contact fidelity"))
+    assert fid["lift_off_s"] is not None and fid["ideal_pull_s"] is not None
+    assert abs(fid["lift_off_s"] - fid["ideal_pull_s"]) <= 0.02 + 1e-9, fid
+    # before it, the soft contact stays close to rolling: slip below 1 cm/s, penetration < 1 um
+    assert fid["slip_max"] < 1e-2 and fid["penetration_max"] < 1e-6, fid
+
+
+def test_disc_claims_replace_only_mujocos_entries():
+    from comparisons.stages.mujoco_contact import ON_DISC, DiscClaims, merge_claims
+    from comparisons.stages.results import Section
+    base = [{"claim_id": "stability-psid10", "engine": e, "verdict": v, "evidence": "x"}
+            for e, v in (("reference", "partly"), ("mujoco", "not assessed"))]
+    base.append({"claim_id": "check-pedal-torque", "engine": "mujoco", "verdict": "not assessed",
+                 "evidence": "y"})
+    disc = DiscClaims([{"claim_id": "stability-psid10", "engine": "mujoco", "verdict": "partly",
+                        "evidence": ON_DISC + "fell at 1.692 s"}], Section("s"))
+    out = merge_claims(base, disc)
+    assert [(c["engine"], c["claim_id"], c["verdict"]) for c in out] == [
+        ("reference", "stability-psid10", "partly"), ("mujoco", "stability-psid10", "partly"),
+        ("mujoco", "check-pedal-torque", "not assessed")]
+    assert out[1]["evidence"].startswith("on thesis-disc") and out[0]["evidence"] == "x"
