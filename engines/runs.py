@@ -41,6 +41,11 @@ class Run:
         return float(self.t[-1]) if self.t.size else 0.0
 
 
+_WHAT = {"inverse": "constrained inverse dynamics (run_inverse: the rider's torques and the "
+                   "contact forces of a prescribed motion)",
+         "forward": "forward dynamics (simulate)"}
+
+
 def run_scenario(label: str, engine, model, scenario, kinds=("inverse", "forward")) -> Run:
     """``scenario`` on ``engine`` (built from ``model``) as a `Run` labelled ``label``. Inverse
     scenarios go through the engine's ``run_inverse`` (the reference model's own
@@ -49,7 +54,7 @@ def run_scenario(label: str, engine, model, scenario, kinds=("inverse", "forward
     t0 = time.perf_counter()
     if scenario.kind not in kinds:
         return Run(label, scenario.name, model.name, scenario.kind, "not run",
-                   f"{label} has no {scenario.kind} dynamics", 0.0)
+                   f"{label} has no {_WHAT[scenario.kind]}", 0.0)
     try:
         if scenario.kind == "inverse":
             if engine is None:

@@ -196,15 +196,14 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
         n = 50 if quick else 200
         tasks.append(Task("pinocchio-terms", engines.pinocchio_terms, (n,), 1.5,
                           "Pinocchio term by term"))
-    if "pinocchio" in opts.engines and "faults" in want:
-        tasks.append(Task(("faults", "pinocchio"), faults.fault_entries, ("pinocchio",), 4.0,
-                          "fault injection on Pinocchio"))
+    if "faults" in want:
+        for e in faults.FAULT_ENGINES:
+            if e in opts.engines:
+                tasks.append(Task(("faults", e), faults.fault_entries, (e,), faults.FAULT_COST[e],
+                                  f"fault injection on {faults.FAULT_LABELS[e]}"))
     if "exudyn" in opts.engines and "terms" in want:
         tasks.append(Task("exudyn-terms", engines.exudyn_terms, (20 if quick else 100,), 1.0,
                           "Exudyn tree term by term"))
-    if "exudyn" in opts.engines and "faults" in want:
-        tasks.append(Task(("faults", "exudyn"), faults.fault_entries, ("exudyn",), 3.0,
-                          "fault injection on Exudyn's tree"))
     if "exudyn" in opts.engines and "exudyn" in want:
         for n in (engines.QUICK_FORWARD if quick else engines.FORWARD):
             tasks.append(Task(("exudyn-trajectory", n), engines.exudyn_trajectory, (n,),
