@@ -37,7 +37,7 @@ from hypothesis import given
 from comparisons.judgments.convergence import error_vs_time, reference_horizon
 from engines import CapabilityError, load_engine
 from engines.kane import KaneEngine, moore_parameters
-from engines.kane.derivation import MOORE_PARAMETERS
+from engines.kane.names import MOORE_PARAMETERS
 from reference_model import COORDINATES, load_model
 from reference_model.scenarios import get_scenario
 

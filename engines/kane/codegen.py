@@ -8,7 +8,7 @@ plain-float `math` functions of one state (``<name>_one``, and ``terms_one`` wit
 the forward right-hand side needs), ~20 times faster than the vectorized code on a single
 state. The module is stored in the reference model's cache folder
 (`reference_model.codegen.cache_root`, ``$BICYCLE_XVAL_CACHE``), in a folder named by a key
-that hashes this file, the derivation's source and sympy's version; the folder is written
+that hashes this file, the derivation's sources and sympy's version; the folder is written
 under a temporary name and renamed into place, and carries a manifest with the size and
 SHA-256 of the module, verified before it is imported (the reference's
 `write_manifest` / `verify_entry`). Within a process the loaded module is kept
@@ -25,21 +25,19 @@ import os
 import shutil
 import tempfile
 import time
+from importlib import metadata
 from pathlib import Path
 from types import ModuleType
-
-import sympy as sp
-from sympy.printing.numpy import NumPyPrinter
-from sympy.printing.pycode import PythonCodePrinter
 
 from reference_model.codegen import (cache_root, clean_stale_temporaries, temporary_prefix,
                                      verify_entry, write_manifest)
 
-from . import derivation
-
+# sympy (and the derivation, which imports sympy.physics.mechanics: ~0.6 s) is imported only
+# to generate: a process that loads the cached module, or builds the engine only to learn
+# that it cannot use a model, never pays for it
 HERE = Path(__file__).resolve().parent
 #: Files whose content the generated module depends on.
-KEY_SOURCES = ("derivation.py", "codegen.py")
+KEY_SOURCES = ("names.py", "derivation.py", "codegen.py")
 MODULE = "kane_generated.py"
 FILES = (MODULE,)
 #: The generated functions: name -> (derivation field, arguments).
@@ -63,18 +61,16 @@ def cache_key() -> str:
     for name in KEY_SOURCES:
         h.update(name.encode())
         h.update((HERE / name).read_bytes())
-    h.update(f"sympy {sp.__version__}".encode())
+    h.update(f"sympy {metadata.version('sympy')}".encode())
     return h.hexdigest()[:16]
 
 
-class _Printer(NumPyPrinter):
-    def __init__(self):
-        super().__init__({"fully_qualified_modules": True, "inline": True})
-
-
-class _ScalarPrinter(PythonCodePrinter):
-    def __init__(self):
-        super().__init__({"fully_qualified_modules": True, "inline": True})
+def _printer(scalar: bool):
+    """sympy's numpy printer (``numpy.sin``...) or its plain-Python one (``math.sin``...)."""
+    from sympy.printing.numpy import NumPyPrinter
+    from sympy.printing.pycode import PythonCodePrinter
+    cls = PythonCodePrinter if scalar else NumPyPrinter
+    return cls({"fully_qualified_modules": True, "inline": True})
 
 
 def _unpack(args: tuple[str, ...], der, index) -> list[str]:
@@ -89,14 +85,15 @@ def _unpack(args: tuple[str, ...], der, index) -> list[str]:
 def _cse(exprs: list) -> tuple[list, list]:
     # optimizations=None: sympy's "basic" pre-optimizations (factor_terms on every expression)
     # took 16-30 s of a 30-70 s cold start and bought nothing measurable at run time
+    import sympy as sp
     return sp.cse(exprs, symbols=sp.numbered_symbols("x"), optimizations=None)
 
 
-def _vectorized(name: str, args: tuple[str, ...], M: sp.Matrix, der) -> str:
+def _vectorized(name: str, args: tuple[str, ...], M, der) -> str:
     """``name(*args) -> (N, rows, cols)``, vectorized over a batch (every state argument
     (N, k), the parameters (k,))."""
     subs, reduced = _cse(list(M))
-    pr = _Printer()
+    pr = _printer(scalar=False)
     lines = [f"def {name}({', '.join(args)}):", "    n = q.shape[0]"]
     lines += _unpack(args, der, lambda a, i: f"[{i}]" if a == "p" else f"[:, {i}]")
     lines += [f"    {sym} = {pr.doprint(e)}" for sym, e in subs]
@@ -108,13 +105,13 @@ def _vectorized(name: str, args: tuple[str, ...], M: sp.Matrix, der) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _scalar(name: str, args: tuple[str, ...], matrices: list[sp.Matrix], der) -> str:
+def _scalar(name: str, args: tuple[str, ...], matrices: list, der) -> str:
     """``name(*args) -> list`` of floats, the entries of ``matrices`` row-major one after the
     other, for ONE state in plain Python floats and `math`: the integrator's right-hand side
     evaluates one state at a time, where a numpy call on a 1-element array costs ~1 us and a
     float operation ~50 ns. One common-subexpression elimination over all the matrices."""
     subs, reduced = _cse([e for M in matrices for e in M])
-    pr = _ScalarPrinter()
+    pr = _printer(scalar=True)
     lines = [f"def {name}({', '.join(args)}):"]
     lines += _unpack(args, der, lambda a, i: f"[{i}]")
     lines += [f"    {sym} = {pr.doprint(e)}" for sym, e in subs]
@@ -124,6 +121,9 @@ def _scalar(name: str, args: tuple[str, ...], matrices: list[sp.Matrix], der) ->
 
 
 def generate_source() -> str:
+    import sympy as sp
+
+    from . import derivation
     der = derivation.derive()
     parts = [f'"""Generated by engines/kane/codegen.py from engines/kane/derivation.py '
              f'(sympy {sp.__version__}). Do not edit; never commit."""\n',

@@ -43,18 +43,9 @@ from dataclasses import dataclass
 import sympy as sp
 import sympy.physics.mechanics as me
 
-__all__ = ["MOORE_PARAMETERS", "TORQUES", "KaneDerivation", "derive"]
+from .names import MOORE_PARAMETERS, TORQUES
 
-#: Moore's parameters in the order the generated code takes them (p[i]).
-MOORE_PARAMETERS: tuple[str, ...] = (
-    "rr", "rf", "d1", "d2", "d3", "l1", "l2", "l3", "l4",
-    "mc", "md", "me", "mf",
-    "IDxx", "IDyy", "IDzz", "ICxx", "ICyy", "ICzz", "ICxz",
-    "IExx", "IEyy", "IEzz", "IExz", "IFxx", "IFyy", "IFzz",
-    "g", "cv",
-)
-#: The rider torques [steer, pedal, anti-roll] (the thesis's [Mdir, Mped, Mvue]).
-TORQUES: tuple[str, ...] = ("T_dir", "T_ped", "T_vue")
+__all__ = ["MOORE_PARAMETERS", "TORQUES", "KaneDerivation", "derive"]
 
 
 @dataclass(frozen=True)

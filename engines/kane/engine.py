@@ -44,7 +44,7 @@ from reference_model.scenarios import Scenario, run_forward
 
 from ..base import CapabilityError, Engine
 from . import codegen
-from .derivation import MOORE_PARAMETERS
+from .names import MOORE_PARAMETERS
 
 __all__ = ["KaneEngine", "moore_parameters", "T_MAP", "ROW_SIGNS"]
 
