@@ -114,8 +114,8 @@ def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
         return run_scenario(label, None, model, sc, setup.kinds)
     cls = resolve(setup.engine)[0]
     if model.contact not in getattr(cls, "contacts", ()):   # not run, and why
-        return Run(label, sc.name, model.name, sc.kind, "not run", _contact_reason(cls, setup, model),
-                   0.0)
+        return Run(label, sc.name, model.name, sc.kind, "not run",
+                   _contact_reason(cls, setup, model), 0.0)
     engine = None if (label == "reference" and sc.kind == "inverse") else setup.build(model)
     return run_scenario(label, engine, model, sc, setup.kinds)
 
@@ -140,6 +140,7 @@ def cost(label: str, scenario: str) -> float:
     scenario = scenario.split("-on-")[0]
     if scenario in ("check", "zigzag"):
         return 0.1 if label == "reference" else 0.8
-    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6, "kane": 0.3}.get(label, 1.0)
+    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6,
+                  "kane": 0.3}.get(label, 1.0)
     length = 6.3 if scenario in ("replay", "check-forward") else 1.2
     return per_second * length
