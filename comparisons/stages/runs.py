@@ -101,6 +101,7 @@ def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
     picklable arguments: worker processes call it."""
     import dataclasses
 
+    from engines import EngineLoadError
     from engines.registry import resolve
     from reference_model import load_model
     from reference_model.scenarios import get_scenario
@@ -112,11 +113,14 @@ def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
     model = load_model(sc.model)
     if sc.kind not in setup.kinds:
         return run_scenario(label, None, model, sc, setup.kinds)
-    cls = resolve(setup.engine)[0]
-    if model.contact not in getattr(cls, "contacts", ()):   # not run, and why
-        return Run(label, sc.name, model.name, sc.kind, "not run",
+    try:
+        engine = None if (label == "reference" and sc.kind == "inverse") else setup.build(model)
+    except EngineLoadError:
+        cls = resolve(setup.engine)[0]
+        if model.contact in getattr(cls, "contacts", ()):
+            raise
+        return Run(label, sc.name, model.name, sc.kind, "not run",   # not run, and why
                    _contact_reason(cls, setup, model), 0.0)
-    engine = None if (label == "reference" and sc.kind == "inverse") else setup.build(model)
     return run_scenario(label, engine, model, sc, setup.kinds)
 
 
