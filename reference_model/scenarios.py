@@ -220,10 +220,13 @@ def torque_input(model: Model, sc: Scenario):
     return sc.torques
 
 
-def run_forward(model: Model, sc: Scenario, *, constraints: str | None = None, **kwargs) -> Trajectory:
-    """Forward run of a scenario from its projected initial state."""
+def run_forward(model: Model, sc: Scenario, *, constraints: str | None = None,
+                torques_from: Model | None = None, **kwargs) -> Trajectory:
+    """Forward run of a scenario from its projected initial state. ``torques_from``: the model
+    whose inverse dynamics make a torque history named by another scenario (default
+    ``model``; an engine without inverse dynamics passes the reference model)."""
     init = initial_state(model, sc)
-    traj = simulate(model, init.q, init.dq, sc.t, torque_input(model, sc),
+    traj = simulate(model, init.q, init.dq, sc.t, torque_input(torques_from or model, sc),
                     constraints=constraints or sc.constraints, baumgarte=sc.baumgarte,
                     **{"fall_limit": sc.fall_limit, **kwargs})
     traj.settings["initial_correction"] = init.describe()

@@ -31,7 +31,7 @@ from comparisons.judgments.diagnose import (TERMS, diagnose, engine_terms, model
 from comparisons.judgments.faults import FAULTS, run_fault_suite, unfaulted
 from comparisons.judgments.terms import random_states
 from engines import load_engine
-from reference_model import Model, ParameterError, codegen
+from reference_model import Model, ParameterError, codegen, load_model
 from reference_model.params import PARAMETER_NAMES, THESIS_FILE
 
 MASS_GEOMETRY = ("M", "Qv", "Qgrav", "Qaero")
@@ -226,6 +226,26 @@ def test_diagnose_localizes_a_flipped_I3xz(tmp_path, capsys):
     assert data["agrees"] is False and data["localized_to"] == "M, Qv via I3xz (body 3 frame+rider)"
     # against itself, the same broken file is consistent: engines and adapters agree
     assert diagnose(bad, n_states=8).agrees
+
+
+def test_diagnose_with_kanes_equations_on_a_disc_bicycle(tmp_path, capsys):
+    """`diagnose --engines kane` (a built-in, disc contact only): the disc-contact thesis
+    bicycle with the frame's CoM 1 mm forward, against Kane's equations built from the
+    correct thesis-disc, is localized to x3 and body 3; the thesis contact is refused (the
+    command line prints the one line and exits 1)."""
+    from engines import EngineLoadError
+    text = THESIS_FILE.read_text()
+    bad = tmp_path / "x3.toml"
+    x3 = load_model("thesis").params.x3
+    line = next(ln for ln in text.splitlines() if ln.startswith("x3 ="))
+    bad.write_text(text.replace(line, f'x3 = {{ value = {x3 + 1e-3!r}, unit = "m" }}')
+                   .replace('contact = "thesis"', 'contact = "disc"'))
+    assert load_model(bad).contact == "disc"
+    assert run_diagnose(_args(bad, against="thesis-disc", engines="kane")) == 1
+    out = capsys.readouterr().out
+    assert "localized: M, Qv, Qgrav, Qaero via x3 (body 3 frame+rider)" in out
+    with pytest.raises(EngineLoadError, match="supports the front-contact models disc, not 'thesis'"):
+        run_diagnose(_args(THESIS_FILE, engines="kane"))
 
 
 def test_diagnose_names_the_contact_model():

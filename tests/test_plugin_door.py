@@ -23,7 +23,10 @@ FILE_SPEC = f"{EXAMPLE / 'numpy_bicycle' / 'engine.py'}:NumpyEngine"
 
 def _pytest(*args, cwd):
     """The conformance plugin in a fresh process, as an engine author runs it."""
-    env = dict(os.environ, PYTHONHASHSEED="0", COLUMNS="400")   # summary lines not cut
+    # summary lines not cut; this checkout's code first (an editable install elsewhere, e.g.
+    # of another worktree, would otherwise supply the plugin)
+    env = dict(os.environ, PYTHONHASHSEED="0", COLUMNS="400",
+               PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
     return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q",
                            "--pyargs", "comparisons.conformance", *args],
                           cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
@@ -91,6 +94,18 @@ def test_conformance_plugin_passes_the_correct_engine_and_fails_the_buggy_one(tm
     assert strict.returncode == 1, strict.stdout[-2000:]
     xpassed = set(re.findall(r"(test_term_sweep\[[^\]]+\]) - \[XPASS\(strict\)\]", strict.stdout))
     assert "3 passed" in strict.stdout and len(xpassed) == 4, strict.stdout[-2000:]
+
+
+def test_conformance_plugin_runs_the_kane_engines_trajectory_by_its_registered_name(tmp_path):
+    """A built-in registered like a plugin (entry point ``kane``) declares ``simulate``, so the
+    plugin collects its forward-run check (and none on the thesis contact it cannot model)."""
+    res = _pytest("--engine", "kane", "--model", "thesis-disc", "--model", "thesis", "-rA",
+                  "-k", "trajectory and psid5", cwd=tmp_path)
+    assert res.returncode == 0, res.stdout[-2000:]
+    assert "PASSED" in res.stdout and "[kane-thesis-disc-stability-psid5]" in res.stdout, \
+        res.stdout[-2000:]
+    assert "1 passed" in res.stdout, res.stdout[-2000:]
+    assert "[kane-thesis-stability" not in res.stdout     # the thesis contact: not collected
 
 
 def test_an_entry_point_of_an_unknown_package_is_found_and_run(tmp_path, monkeypatch, capsys):

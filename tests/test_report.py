@@ -24,7 +24,7 @@ def report(quick_report):
 
 def test_summary_carries_the_contract_keys(report):
     _, summary = report
-    assert summary["engines"] == ["reference", "pinocchio", "exudyn", "mujoco"]
+    assert summary["engines"] == ["reference", "pinocchio", "exudyn", "kane", "mujoco"]
     assert {"comparisons", "claims", "faults", "environment"} <= set(summary)
     assert summary["comparisons"], "no engine comparison in the summary"
     for c in summary["comparisons"]:
@@ -37,8 +37,11 @@ def test_summary_carries_the_contract_keys(report):
     setups = ("reference", "pinocchio", "exudyn-tree")
     claims = {(c["claim_id"], c["engine"]): c for c in summary["claims"]}
     assert len(claims) == len(summary["claims"])
-    assert set(claims) == {(cid, e) for e in setups + ("mujoco",) for cid in
-                           ("check-pedal-torque", "replay-identical", "stability-psid10")}
+    ids = ("check-pedal-torque", "replay-identical", "stability-psid10")
+    assert set(claims) == {(cid, e) for e in setups + ("kane", "mujoco") for cid in ids}
+    # Kane's equations model the disc contact only: on the thesis bicycle's runs nothing of
+    # its own to judge
+    assert all(claims[(cid, "kane")]["verdict"] == "not assessed" for cid in ids)
     runs = {(r["engine"], r["scenario"]): r for r in summary["engine_runs"]}
     # MuJoCo has no thesis (fork-axis) front contact: its runs of the thesis's scenarios are
     # 'not run', a declared model difference, and (without the contact section, which judges
@@ -93,6 +96,13 @@ def test_every_engine_runs_every_scenario_it_can(report):
         assert runs[("exudyn-tree", sc)] == "not run"
     assert all(runs[(e, "stability-psid10")] in ("fell", "completed")
                for e in ("reference", "pinocchio", "exudyn-tree"))
+    # Kane's equations: no inverse dynamics, and the thesis's contact is not Moore's geometry:
+    # every run here is 'not run', with the engine's own reason, and costs nothing
+    kane = {r["scenario"]: r for r in summary["engine_runs"] if r["engine"] == "kane"}
+    assert {r["status"] for r in kane.values()} == {"not run"}
+    assert kane["check"]["message"] == "kane has no inverse dynamics"
+    assert kane["stability-psid10"]["message"].startswith("CapabilityError: engine 'kane' "
+                                                          "cannot use the front contact 'thesis'")
 
 
 def test_inverse_dynamics_torques_and_multipliers_compared_per_engine(report):
@@ -124,6 +134,24 @@ def test_faults_are_detected_and_localized(report):
     exu = {f["fault"]: f for f in summary["faults"] if f["engine"] == "exudyn"}
     assert exu["contact-switched"]["localized_to"].startswith("trajectory via front contact")
     assert all(f["verdict"] == "localized" for f in exu.values())
+    # Kane's equations on the disc-contact thesis bicycle give M, the generalized forces, D and
+    # dD dq: all six faults show in its terms, the contact switch in D and dD dq
+    kane = {f["fault"]: f for f in summary["faults"] if f["engine"] == "kane"}
+    assert len(kane) == 6 and all(f["verdict"] == "localized" and f["model"] == "thesis-disc"
+                                  for f in kane.values())
+    assert kane["contact-switched"]["localized_to"].startswith("D, dD dq via front contact")
+
+
+def test_kane_terms_pass_on_the_disc_model_and_are_not_run_on_the_thesis_contact(report):
+    out, summary = report
+    terms = [c for c in summary["comparisons"] if c["engines"] == ["reference", "kane"]]
+    assert {c["quantity"] for c in terms} == {"mass_matrix", "generalized_forces",
+                                              "constraint_jacobian", "constraint_bias",
+                                              "forward_acceleration"}
+    assert all(c["model"] == "thesis-disc" and c["passed"] for c in terms)
+    text = (out / "report.md").read_text()
+    assert "## Reference vs kane, term by term" in text
+    assert "| thesis | - | - | - | not run | EngineLoadError: engine 'kane'" in text
 
 
 def test_report_starts_with_the_verdict_then_claims_then_summary(report):

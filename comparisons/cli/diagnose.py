@@ -27,7 +27,8 @@ def add_diagnose_parser(subparsers) -> None:
                    help="an engine to check: a name, package.module:Class or path/file.py:Class "
                         "(repeatable)")
     s.add_argument("--engines", default=None,
-                   help="comma-separated engine names, the same as --engine [pinocchio]")
+                   help="comma-separated engine names, the same as --engine, e.g. "
+                        "pinocchio,exudyn,kane (kane: disc-contact models only) [pinocchio]")
     from .engines import add_engine_option_argument
     add_engine_option_argument(s)
     s.add_argument("--against", default=None,

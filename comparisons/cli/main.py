@@ -6,7 +6,7 @@
     bicycle-xval simulate --model thesis --scenario stability-psid10 --out FILE.csv
     bicycle-xval run [--out DIR] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
                      [--tolerances FILE] [--model NAME|FILE ...] [--scenario-file FILE ...]
-    bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn] [--json OUT]
+    bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn,kane] [--json OUT]
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
     bicycle-xval import FILE --from benchmark --out my.toml [--name NAME]
                         [--allow-triangle-violation]

