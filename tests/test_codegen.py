@@ -108,10 +108,15 @@ def test_loading_cached_code_does_not_import_sympy():
     """sympy (0.3-0.5 s to import) is for generating code only: the CLI, the pipeline and a
     model evaluated from the cache must not import it. Planted: a top-level ``import sympy``
     in reference_model/codegen.py fails this."""
-    load_model("thesis").mass_matrix(np.zeros(8))     # the entry exists before the subprocess
+    load_model("thesis").mass_matrix(np.zeros(8))     # the entries exist before the subprocess
+    from engines import load_engine
+    load_engine("kane", load_model("thesis-disc"))
     code = ("import sys, numpy as np, comparisons.cli.main, comparisons.stages.pipeline, engines\n"
             "from reference_model import load_model\n"
             "load_model('thesis').mass_matrix(np.zeros(8))\n"
+            "from engines import load_engine\n"
+            "for name in ('kane', 'mujoco'):\n"
+            "    load_engine(name, load_model('thesis-disc'))\n"
             "print(sorted(m for m in sys.modules if m == 'sympy' or m.startswith('sympy.'))[:3])")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
                          timeout=120)
