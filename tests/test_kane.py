@@ -24,7 +24,7 @@ horizon) and 5e-11 (stability-psid5 on thesis-disc): 1e-8 sits two orders above 
 numerics make here, and two below the horizon's 1e-6 (beyond which nothing is comparable).
 A modelling error is far above it (see the planted torque-sign bug below).
 
-The cold derivation (~10 s) happens at most once per machine and sympy version (the disk
+The cold derivation (~9 s) happens at most once per machine and sympy version (the disk
 cache) and once per process (`engines.kane.codegen.load` is cached).
 """
 

@@ -285,7 +285,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
             progress(f"engine {name} dropped: {reason}")
     labels = [s.label for s in setups]
     if "kane" in opts.engines:   # its generated code: derived here once if the cache is cold
-        from engines.kane.codegen import load   # (~12 s), not by several workers at once;
+        from engines.kane.codegen import load   # (~9 s), not by several workers at once;
         load()                                  # the workers inherit it
     case_list, not_run = build_cases(opts.scenarios, opts.models, opts.scenario_files)
     cases = {c.name: c.scenario for c in case_list}

@@ -1,7 +1,7 @@
 """The code generator of the Kane derivation: prints its expressions as a Python module and
 caches that module on disk like the reference model's (the module is never committed).
 
-The derivation (`engines.kane.derivation`, ~10 s) runs once: its expressions go through
+The derivation (`engines.kane.derivation`, 7 s measured) runs once: its expressions go through
 sympy's common-subexpression elimination and are printed twice, as numpy functions
 vectorized over a batch of states (every symbol a (N,) array, the parameters scalars) and as
 plain-float `math` functions of one state (``<name>_one``, and ``terms_one`` with everything
