@@ -96,18 +96,6 @@ def test_conformance_plugin_passes_the_correct_engine_and_fails_the_buggy_one(tm
     assert "3 passed" in strict.stdout and len(xpassed) == 4, strict.stdout[-2000:]
 
 
-def test_conformance_plugin_runs_the_kane_engines_trajectory_by_its_registered_name(tmp_path):
-    """A built-in registered like a plugin (entry point ``kane``) declares ``simulate``, so the
-    plugin collects its forward-run check (and none on the thesis contact it cannot model)."""
-    res = _pytest("--engine", "kane", "--model", "thesis-disc", "--model", "thesis", "-rA",
-                  "-k", "trajectory and psid5", cwd=tmp_path)
-    assert res.returncode == 0, res.stdout[-2000:]
-    assert "PASSED" in res.stdout and "[kane-thesis-disc-stability-psid5]" in res.stdout, \
-        res.stdout[-2000:]
-    assert "1 passed" in res.stdout, res.stdout[-2000:]
-    assert "[kane-thesis-stability" not in res.stdout     # the thesis contact: not collected
-
-
 def test_an_entry_point_of_an_unknown_package_is_found_and_run(tmp_path, monkeypatch, capsys):
     """A temporary installed distribution (a dist-info with an entry point) naming the example's
     class, on the path as an installed package would be: `engines` lists it and `simulate`

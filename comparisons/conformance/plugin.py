@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-BUILTIN_ENGINES = ("pinocchio", "exudyn", "mujoco")
+BUILTIN_ENGINES = ("pinocchio", "exudyn", "kane", "mujoco")
 
 
 @dataclass
@@ -67,7 +67,7 @@ def pytest_addoption(parser):
     g = parser.getgroup("bicycle-xval", "bicycle-xval engine conformance")
     g.addoption("--engine", dest="bx_engines", action="append", default=[], metavar="SPEC",
                 help="engine to check: a registered name, package.module:Class or "
-                     "path/file.py:Class (repeatable) [the built-ins: pinocchio, exudyn, mujoco]")
+                     "path/file.py:Class (repeatable) [the built-ins: pinocchio, exudyn, kane, mujoco]")
     g.addoption("--engine-option", dest="bx_options", action="append", default=[],
                 metavar="KEY=VALUE", help="an option for every --engine (repeatable)")
     g.addoption("--model", dest="bx_models", action="append", default=[], metavar="NAME|FILE",
