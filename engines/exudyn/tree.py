@@ -113,41 +113,41 @@ class ThesisFrontContact:
 
     def _rows(self, q):
         self.calls += 1
-        q = np.asarray(q, dtype=float)[:N_Q]
-        if self._last_q is not None and np.array_equal(q, self._last_q):
+        key = tuple(np.asarray(q, dtype=float)[:N_Q].tolist())   # plain floats: cheap to compare
+        if key == self._last_q:
             return self._last
-        xc, yc, phi, theta, _, beta, gamma, _ = (float(v) for v in q)
+        xc, yc, phi, theta, _, beta, gamma, _ = key
         cf, sf, ct, st = math.cos(phi), math.sin(phi), math.cos(theta), math.sin(theta)
         cb, sb, cg, sg = math.cos(beta), math.sin(beta), math.cos(gamma), math.sin(gamma)
         # columns of Ai2 = Rz(phi) Rx(theta), A3 = Ai2 Ry(beta), A4 = A3 Rz(gamma)
         x1 = (cf, sf, 0.0)
         y2 = (-sf * ct, cf * ct, st)
         z2 = (sf * st, -cf * st, ct)
-        x3 = tuple(cb * x1[i] - sb * z2[i] for i in range(3))
-        z3 = tuple(sb * x1[i] + cb * z2[i] for i in range(3))
-        x4 = tuple(cg * x3[i] + sg * y2[i] for i in range(3))
-        y4 = tuple(-sg * x3[i] + cg * y2[i] for i in range(3))
-        (xa, _, za), (x5, _, z5), R = self._a, self._f, self._R
-        rG2 = (xc + self._hub * z2[0], yc + self._hub * z2[1], self._hub * z2[2])
-        rA = tuple(rG2[i] + xa * x3[i] + za * z3[i] for i in range(3))
-        rG5 = tuple(rA[i] + x5 * x4[i] + z5 * z3[i] for i in range(3))
-        rD = tuple(rG5[i] - R * z3[i] for i in range(3))     # z4 = z3 (steer about z3)
+        x3 = (cb * x1[0] - sb * z2[0], cb * x1[1] - sb * z2[1], -sb * z2[2])
+        z3 = (sb * x1[0] + cb * z2[0], sb * x1[1] + cb * z2[1], cb * z2[2])
+        x4 = (cg * x3[0] + sg * y2[0], cg * x3[1] + sg * y2[1], cg * x3[2] + sg * y2[2])
+        (xa, _, za), (x5, _, z5), R, hub = self._a, self._f, self._R, self._hub
+        rG2 = (xc + hub * z2[0], yc + hub * z2[1], hub * z2[2])
+        rA = (rG2[0] + xa * x3[0] + za * z3[0], rG2[1] + xa * x3[1] + za * z3[1],
+              rG2[2] + xa * x3[2] + za * z3[2])
+        # rD = rG5 - R z3 with rG5 = rA + x5 x4 + z5 z3 (z4 = z3: steer about z3)
+        rD = (rA[0] + x5 * x4[0] + (z5 - R) * z3[0], rA[1] + x5 * x4[1] + (z5 - R) * z3[1],
+              rA[2] + x5 * x4[2] + (z5 - R) * z3[2])
         d = (rD[0] - xc, rD[1] - yc, rD[2])
-
-        def cross(a, b):
-            return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-        J = np.zeros((3, N_Q))
-        J[0, 0] = J[1, 1] = 1.0
-        J[:, 2] = (-d[1], d[0], 0.0)                      # e_Z x (rD - rC)
-        J[:, 3] = cross(x1, d)
-        J[:, 5] = cross(y2, tuple(rD[i] - rG2[i] for i in range(3)))
-        J[:, 6] = cross(z3, tuple(rD[i] - rA[i] for i in range(3)))
-        J_height = J[2].copy()                            # fork point: no eps column
-        J[:, 7] = (-R * x4[0], -R * x4[1], -R * x4[2])    # y4 x (rD - rG5) = y4 x (-R z4)
-        rD_z = rD[2]
-        self._last_q = q.copy()
-        self._last = (rD_z, J_height, J[:2].copy())
+        e = (rD[0] - rG2[0], rD[1] - rG2[1], rD[2] - rG2[2])
+        f = (rD[0] - rA[0], rD[1] - rA[1], rD[2] - rA[2])
+        # the columns: e_Z x d (phi), x1 x d (theta), y2 x e (beta), z3 x f (gamma)
+        c_phi = (-d[1], d[0], 0.0)
+        c_theta = (x1[1] * d[2] - x1[2] * d[1], x1[2] * d[0] - x1[0] * d[2], x1[0] * d[1] - x1[1] * d[0])
+        c_beta = (y2[1] * e[2] - y2[2] * e[1], y2[2] * e[0] - y2[0] * e[2], y2[0] * e[1] - y2[1] * e[0])
+        c_gamma = (z3[1] * f[2] - z3[2] * f[1], z3[2] * f[0] - z3[0] * f[2], z3[0] * f[1] - z3[1] * f[0])
+        # rows over (xc, yc, phi, theta, psi, beta, gamma, eps); eps: y4 x (-R z4) = -R x4
+        J_height = np.array([0.0, 0.0, c_phi[2], c_theta[2], 0.0, c_beta[2], c_gamma[2], 0.0])
+        J_velocity = np.array([
+            [1.0, 0.0, c_phi[0], c_theta[0], 0.0, c_beta[0], c_gamma[0], -R * x4[0]],
+            [0.0, 1.0, c_phi[1], c_theta[1], 0.0, c_beta[1], c_gamma[1], -R * x4[1]]])
+        self._last_q = key
+        self._last = (rD[2], J_height, J_velocity)   # the height row: the fork's point, no eps
         return self._last
 
     def jacobian_check(self, q) -> float:
