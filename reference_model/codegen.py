@@ -421,7 +421,9 @@ def derivation(contact: str, gyroscopic: bool = True) -> dv.Derivation:
 def _source(contact: str, gyroscopic: bool, language: str) -> tuple[str, dict[str, GeneratedFunction]]:
     """The generated source of a variant, once per process (CSE and printing: ~2 s)."""
     from .codegen_emit import generate_source
-    return generate_source(derivation(contact, gyroscopic), language)
+    source, layout = generate_source(derivation(contact, gyroscopic), language)
+    return source, {name: GeneratedFunction(name, size, symmetric)
+                    for name, (size, symmetric) in layout.items()}
 
 
 def _intact_source(target: Path, identity: dict[str, Any]) -> tuple[str, dict] | None:
