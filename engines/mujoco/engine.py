@@ -43,6 +43,7 @@ from reference_model import COORDINATES, Model
 from reference_model.export_mjcf import MjcfSettings, massless_links, mjcf_text
 
 from ..base import CapabilityError, Engine, EngineError, EngineUsageError
+from .options import tuple_option
 
 try:
     import mujoco
@@ -52,19 +53,6 @@ except ImportError as exc:  # pragma: no cover - mujoco is a declared dependency
 N_Q = 8
 DEFAULTS = MjcfSettings()
 TERMS = frozenset({"mass_matrix", "inverse_dynamics", "gravity"})
-
-
-def tuple_option(name: str, value):
-    """solref/solimp as given: a sequence, or text with commas or spaces (the CLI's)."""
-    if isinstance(value, str):
-        parts = value.replace(",", " ").split()
-        try:
-            return tuple(float(v) for v in parts)
-        except ValueError:
-            raise EngineUsageError(f"MuJoCo option {name} = {value!r}: not a list of numbers; "
-                                   f"fix: e.g. {name}={','.join(map(repr, getattr(DEFAULTS, name)))}"
-                                   ) from None
-    return value
 
 
 def compile_mjcf(text: str, links: tuple[str, ...]) -> "mujoco.MjModel":
@@ -102,10 +90,11 @@ class MujocoEngine(Engine):
                  tolerance: float = DEFAULTS.tolerance,
                  wheel_half_width: float = DEFAULTS.wheel_half_width):
         super().__init__(model)
+        solref, solimp = tuple_option("solref", solref), tuple_option("solimp", solimp)
         try:
             self.settings = MjcfSettings(
-                timestep=timestep, integrator=integrator, solref=tuple_option("solref", solref),
-                solimp=tuple_option("solimp", solimp), friction=friction, cone=cone,
+                timestep=timestep, integrator=integrator, solref=solref,
+                solimp=solimp, friction=friction, cone=cone,
                 condim=condim, noslip_iterations=noslip_iterations, solver=solver,
                 iterations=iterations, tolerance=tolerance, wheel_half_width=wheel_half_width)
         except (TypeError, ValueError) as exc:

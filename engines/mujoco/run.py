@@ -47,7 +47,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
-from .engine import tuple_option
+from .options import tuple_option
 
 import mujoco
 
