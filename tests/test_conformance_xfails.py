@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from comparisons.conformance.plugin import Candidate, _engine_xfail, declared_xfails
+from comparisons.conformance.plugin import Candidate, declared_reason, declared_xfails
 
 
 class _Declares:
@@ -28,15 +28,15 @@ def _item(name: str, spec: str = "acme"):
     ("test_term_sweep[acme-thesis-disc-mass_matrix]", False),
 ])
 def test_declared_pattern_matches_exactly_the_named_checks(name, expected):
-    reason = _engine_xfail(_item(name))
+    reason = declared_reason(_item(name))
     assert (reason is not None) == expected
     if expected:
         assert reason == "declared by acme: lifts off"
 
 
 def test_an_item_without_a_candidate_is_left_alone():
-    assert _engine_xfail(SimpleNamespace(name="test_x", callspec=SimpleNamespace(params={}))) is None
-    assert _engine_xfail(SimpleNamespace(name="test_x")) is None
+    assert declared_reason(SimpleNamespace(name="test_x", callspec=SimpleNamespace(params={}))) is None
+    assert declared_reason(SimpleNamespace(name="test_x")) is None
 
 
 def test_a_declared_file_is_read_like_an_xfails_file(tmp_path):

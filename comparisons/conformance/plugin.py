@@ -183,7 +183,7 @@ def declared_xfails(engine) -> dict[str, str]:
     return dict(declared)
 
 
-def _engine_xfail(item) -> str | None:
+def declared_reason(item) -> str | None:
     """The reason, if the candidate's engine declares this check an expected failure."""
     import re
 
@@ -213,7 +213,7 @@ def pytest_collection_modifyitems(config, items):
         if reason is not None:
             seen.add(item.name if item.name in conf.xfails else item.nodeid)
         else:
-            reason = _engine_xfail(item)
+            reason = declared_reason(item)
         if reason is not None:
             item.add_marker(pytest.mark.xfail(reason=reason, strict=True))
     unknown = sorted(set(conf.xfails) - seen)
