@@ -77,6 +77,12 @@ class Engine:
     def __repr__(self) -> str:
         return f"{type(self).__name__}(model={self.model.name!r}, contact={self.model.contact!r})"
 
+    @classmethod
+    def prepare(cls) -> None:
+        """Work every instance shares, done once in the main process before `run`'s worker
+        processes fork, so they inherit it instead of each doing it (e.g. generating and
+        loading cached code). Default: nothing."""
+
     def supports(self, capability: str) -> bool:
         return capability in self.capabilities
 

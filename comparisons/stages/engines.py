@@ -54,22 +54,39 @@ def _term_rows(sec: Section, results, model_name: str, engines: list[str], scena
 
 # -- Pinocchio: term by term -----------------------------------------------------------------
 
+TERM_HEADER = ("model", "quantity", "max error", "tolerance", "verdict", "worst entry")
+
+
+def _terms_on_both_contacts(sec: Section, spec: str, label: str, options: dict, states,
+                            n_states: int) -> tuple[list[tuple], dict]:
+    """``spec``'s declared terms against the reference on `thesis` and `thesis-disc` (rows,
+    comparisons into ``sec``); a model the engine cannot be built on is a 'not run' row.
+    Returns the rows and the engines built, by model name."""
+    rows, built = [], {}
+    for name in ("thesis", "thesis-disc"):
+        model = load_model(name)
+        try:
+            eng = load_engine(spec, model, **options)
+        except Exception as exc:   # noqa: BLE001 - a model the engine does not support
+            rows.append((name, "-", "-", "-", "not run", f"{type(exc).__name__}: {exc}"))
+            continue
+        built[name] = ref, eng = load_engine("reference", model), eng
+        rows += _term_rows(sec, compare_terms(ref, eng, states), name, ["reference", label],
+                           f"random-states-{n_states}", (name,))
+    return rows, built
+
+
 def pinocchio_terms(n_states: int) -> Section:
     sec = Section("Reference vs Pinocchio, term by term")
     sec.text(f"At {n_states} deterministic states (large lean, steer near ±π/2, rates up to "
              "20 rad/s); errors relative to the scale each tolerance names "
              "(`comparisons/judgments/tolerances.toml`).")
     states = random_states(n_states, seed=7)
-    rows = []
-    for name in ("thesis", "thesis-disc"):
-        model = load_model(name)
-        ref, pin = load_engine("reference", model), load_engine("pinocchio", model)
-        rows += _term_rows(sec, compare_terms(ref, pin, states), name, ["reference", "pinocchio"],
-                           f"random-states-{n_states}", (name,))
-        if name == "thesis":
-            M_ref = ref.mass_matrix(states.q)
-            diff = np.abs(M_ref - pin.mass_matrix(states.q)).max(axis=0) / np.abs(M_ref).max()
-    sec.table(("model", "quantity", "max error", "tolerance", "verdict", "worst entry"), rows)
+    rows, built = _terms_on_both_contacts(sec, "pinocchio", "pinocchio", {}, states, n_states)
+    sec.table(TERM_HEADER, rows)
+    ref, pin = built["thesis"]
+    M_ref = ref.mass_matrix(states.q)
+    diff = np.abs(M_ref - pin.mass_matrix(states.q)).max(axis=0) / np.abs(M_ref).max()
     sec.figure("mass_matrix_error_pinocchio.png", "matrix_error", relative=diff,
                labels=list(COORDINATES), tolerance=1e-12,
                title="mass matrix: reference vs Pinocchio, max over the states",
@@ -86,18 +103,9 @@ def plugin_terms(spec: str, options: dict, n_states: int) -> Section:
     sec.text(f"`{spec}`{' with ' + str(options) if options else ''} at {n_states} deterministic "
              "states (large lean, steer near ±π/2, rates up to 20 rad/s), the quantities it "
              "declares; errors relative to the scale each tolerance names.")
-    states = random_states(n_states, seed=7)
-    rows = []
-    for name in ("thesis", "thesis-disc"):
-        model = load_model(name)
-        try:
-            eng = load_engine(spec, model, **options)
-        except Exception as exc:   # noqa: BLE001 - a model the engine does not support
-            rows.append((name, "-", "-", "-", "not run", f"{type(exc).__name__}: {exc}"))
-            continue
-        rows += _term_rows(sec, compare_terms(load_engine("reference", model), eng, states), name,
-                           ["reference", label], f"random-states-{n_states}", (name,))
-    sec.table(("model", "quantity", "max error", "tolerance", "verdict", "worst entry"), rows)
+    rows, _ = _terms_on_both_contacts(sec, spec, label, options,
+                                      random_states(n_states, seed=7), n_states)
+    sec.table(TERM_HEADER, rows)
     return sec
 
 

@@ -284,9 +284,12 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         for name, reason in dropped:
             progress(f"engine {name} dropped: {reason}")
     labels = [s.label for s in setups]
-    if "kane" in opts.engines:   # its generated code: derived here once if the cache is cold
-        from engines.kane.codegen import load   # (~9 s), not by several workers at once;
-        load()                                  # the workers inherit it
+    from engines.registry import resolve
+    for spec in opts.engines:   # shared work (e.g. generated code) once, inherited by the workers
+        try:
+            resolve(spec)[0].prepare()
+        except Exception as exc:   # noqa: BLE001 - the engine's stages then say what fails
+            progress(f"engine {spec}: preparing failed ({type(exc).__name__}: {exc})")
     case_list, not_run = build_cases(opts.scenarios, opts.models, opts.scenario_files)
     cases = {c.name: c.scenario for c in case_list}
     names = list(cases)

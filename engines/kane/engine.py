@@ -169,6 +169,11 @@ class KaneEngine(Engine):
                               "constraint_bias", "forward_acceleration", "simulate"})
     contacts = ("disc",)
 
+    @classmethod
+    def prepare(cls) -> None:
+        """Derive and generate the code if the cache is cold (~9 s), once, before workers fork."""
+        codegen.load()
+
     def __init__(self, model: Model):
         if model.contact not in self.contacts:
             raise CapabilityError(
