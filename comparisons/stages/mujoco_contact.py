@@ -283,12 +283,10 @@ def claims_on_disc(names: tuple[str, ...]) -> DiscClaims:
     model = load_model(MODEL)
     stab = [n for n in names if n.startswith("stability-")]
     runs = {}
+    built = {label: load_engine(label, model) for label in ("mujoco", "reference")}
     for n in stab:
-        sc = SCENARIOS[n]
-        runs[("mujoco", n)] = run_scenario("mujoco", load_engine("mujoco", model), model, sc,
-                                           ("forward",))
-        runs[("reference", n)] = run_scenario("reference", load_engine("reference", model), model,
-                                              sc, ("forward",))
+        for label, engine in built.items():
+            runs[(label, n)] = run_scenario(label, engine, model, SCENARIOS[n], ("forward",))
     judged = [c for c in judge_claims(runs, ["reference", "mujoco"], model, stab)
               if c["claim_id"].startswith("stability-")]
     sec = Section("MuJoCo on thesis-disc: the thesis's stability claims")
