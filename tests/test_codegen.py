@@ -104,21 +104,32 @@ def test_generated_code_is_not_committed():
     assert not [f for f in files if f.endswith((".so", "bicycle_generated.c"))]
 
 
-def test_loading_cached_code_does_not_import_sympy():
-    """sympy (0.3-0.5 s to import) is for generating code only: the CLI, the pipeline and a
-    model evaluated from the cache must not import it. Planted: a top-level ``import sympy``
-    in reference_model/codegen.py fails this."""
+def test_the_run_path_imports_neither_sympy_nor_pandas():
+    """sympy (0.3-0.5 s to import) is for generating code only, pandas (0.7 s) for the sweep
+    and the ``eigenvalues`` table: the CLI, the pipeline, its workers' warm imports, a model
+    evaluated from the cache, the engines, the eigenvalue figure's data and the report's CSV
+    files must import neither. Planted: a top-level ``import sympy`` in
+    reference_model/codegen.py fails this, and so does ``import pandas`` in
+    comparisons/report/frames.py."""
     load_model("thesis").mass_matrix(np.zeros(8))     # the entries exist before the subprocess
     from engines import load_engine
     load_engine("kane", load_model("thesis-disc"))
     code = ("import sys, numpy as np, comparisons.cli.main, comparisons.stages.pipeline, engines\n"
+            "from comparisons.stages.pool import warm_imports\n"
+            "warm_imports()\n"
             "from reference_model import load_model\n"
             "load_model('thesis').mass_matrix(np.zeros(8))\n"
             "from engines import load_engine\n"
             "for name in ('kane', 'mujoco'):\n"
             "    load_engine(name, load_model('thesis-disc'))\n"
-            "print(sorted(m for m in sys.modules if m == 'sympy' or m.startswith('sympy.'))[:3])")
+            "from comparisons.judgments.eigenvalues import eigenvalue_curves\n"
+            "eigenvalue_curves(load_model('benchmark'), [1.0, 5.0])\n"
+            "from comparisons.report import frames, writer\n"
+            "from comparisons.stages.files import csv_bytes\n"
+            "t = np.zeros(2); q = np.zeros((2, 8))\n"
+            "csv_bytes(frames.frame(t, q, q, q, {'C_1': t}))\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('sympy', 'pandas'))[:3])")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0, out.stderr[-1000:]
-    assert out.stdout.strip() == "[]", f"sympy imported: {out.stdout.strip()}"
+    assert out.stdout.strip() == "[]", f"imported: {out.stdout.strip()}"

@@ -52,10 +52,12 @@ def critical_speeds(model, speeds) -> tuple[float | None, float | None]:
 
 def eigenvalue_curves(model, speeds) -> dict:
     """What the eigenvalues-against-speed figure draws: speeds, real and imaginary parts (4
-    columns each), the weave and capsize speeds (None where none) and the model's name."""
-    frame = eigenvalue_table(model, speeds)
-    weave, capsize = critical_speeds(model, frame["v"].to_numpy())
-    return {"v": frame["v"].to_numpy(),
-            "re": np.stack([frame[f"re_{k}"].to_numpy() for k in range(1, 5)], axis=1),
-            "im": np.stack([frame[f"im_{k}"].to_numpy() for k in range(1, 5)], axis=1),
+    columns each, as in `eigenvalue_table`), the weave and capsize speeds (None where none) and
+    the model's name."""
+    from reference_model.linearize import eigenvalues
+
+    v = np.atleast_1d(np.asarray(speeds, dtype=np.float64))
+    lam = eigenvalues(model, v)[:, :4]
+    weave, capsize = critical_speeds(model, v)
+    return {"v": v, "re": np.ascontiguousarray(lam.real), "im": np.ascontiguousarray(lam.imag),
             "weave": weave, "capsize": capsize, "model": model.name}

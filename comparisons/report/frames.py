@@ -1,4 +1,6 @@
-"""Runs as tables (pandas DataFrames) with the documented CSV columns.
+"""Runs as tables with the documented CSV columns: plain ordered mappings of column name to
+array, which `comparisons.stages.files.csv_bytes` writes (pandas, 0.7 s to import, stays off
+the report's path; ``pandas.DataFrame(table)`` gives a frame where one is wanted).
 
 Columns: ``t``, the eight coordinates, ``d_<name>``, ``dd_<name>``, then ``Mdir, Mped, Mvue``
 and ``lambda_1..lambda_5`` (inverse dynamics) or ``C_1..C_5`` (simulations).
@@ -11,14 +13,13 @@ import numpy as np
 from reference_model import COORDINATES, TORQUE_NAMES
 
 
-def frame(t, q, dq, ddq, extra: dict):
-    import pandas as pd
+def frame(t, q, dq, ddq, extra: dict) -> dict[str, np.ndarray]:
     cols = {"t": t}
     cols.update({n: q[:, i] for i, n in enumerate(COORDINATES)})
     cols.update({f"d_{n}": dq[:, i] for i, n in enumerate(COORDINATES)})
     cols.update({f"dd_{n}": ddq[:, i] for i, n in enumerate(COORDINATES)})
     cols.update(extra)
-    return pd.DataFrame(cols)
+    return cols
 
 
 def inverse_frame(res):

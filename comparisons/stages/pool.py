@@ -19,7 +19,7 @@ from typing import Any, Callable, Hashable
 MAX_WORKERS = 8
 #: imported once in the main process before the workers fork, so each worker does not import
 #: them again (about a second of CPU per worker for the engines' libraries)
-WARM_IMPORTS = ("scipy.integrate", "pandas", "pinocchio", "exudyn", "matplotlib.pyplot",
+WARM_IMPORTS = ("scipy.integrate", "pinocchio", "exudyn", "matplotlib.pyplot",
                 "engines.pinocchio", "engines.exudyn", "engines.kane")
 
 
