@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figures import _plain_log, _plt, png_bytes
+from .figures import _plt, png_bytes
 from ..stages.files import write_bytes, write_text
 
 MAX_LISTED = 200      # disagreeing bicycles listed in report.md (all are in results.parquet)
@@ -51,7 +51,6 @@ def agreement_figure(frame, axes, tolerance: float):
         if bad.any():
             ax.semilogy(x[bad], np.full(bad.sum(), top), "x", color="tab:red", label="failed")
         ax.axhline(tolerance, color="k", lw=0.8, ls="--", label="largest tolerance")
-        _plain_log(ax)
         ax.set_xlabel(label)
         ax.set_ylabel("max error (all engines, terms)")
     panels[0][0].legend(fontsize=7)
