@@ -289,3 +289,13 @@ def test_energy_drifts_refuses_named_and_sampled_torques(disc):
     zero = TorqueSamples((0.0, 1.0), ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
     assert not applies_torques(dataclasses.replace(base, torques=zero))
     assert not applies_torques(base)
+
+
+def test_quick_convergence_steps_can_reach_a_verdict():
+    """--quick's Exudyn convergence study uses its own steps; they must still be >= 3 steps
+    spanning MIN_SPAN, or every verdict is 'inconclusive' and the quick run fails. Planted:
+    the full study's steps without the finest (span 4x) fails this."""
+    from comparisons.judgments.convergence import MIN_SPAN
+    from comparisons.stages.engines import QUICK_CONVERGENCE_STEPS
+    h = sorted(QUICK_CONVERGENCE_STEPS)
+    assert len(h) >= 3 and h[-1] / h[0] >= MIN_SPAN

@@ -154,6 +154,22 @@ def test_kane_terms_pass_on_the_disc_model_and_are_not_run_on_the_thesis_contact
     assert "| thesis | - | - | - | not run | EngineLoadError: engine 'kane'" in text
 
 
+def test_quick_runs_exudyn_on_one_benchmark_manoeuvre_and_says_so(report):
+    """--quick judges all three IFToMM manoeuvres on the reference, runs Exudyn on
+    benchmark-v4.6 only, and names the other two where a reader looks for them. Planted: the
+    pipeline passing QUICK_BUILDS to every manoeuvre again fails the first assertion."""
+    out, summary = report
+    exudyn = {c["scenario"] for c in summary["comparisons"]
+              if c["quantity"] == "trajectory (benchmark)"}
+    assert exudyn == {"benchmark-v4.6"}
+    physics = {c["scenario"] for c in summary["comparisons"]
+               if c["quantity"].startswith("outcome:") and c["engines"] == ["reference"]}
+    assert physics == {"benchmark-v4", "benchmark-v4.6", "benchmark-v8"}
+    text = (out / "report.md").read_text()
+    assert ("Run on the reference only (`--quick`: Exudyn runs benchmark-v4.6): "
+            "benchmark-v4, benchmark-v8.") in text
+
+
 def test_report_starts_with_the_verdict_then_claims_then_summary(report):
     """First screen: the verdict, then (no failures here) the claims, then the summary table;
     every figure drawn is linked."""

@@ -142,21 +142,23 @@ def _cpu() -> str:
     return platform.processor() or platform.machine()
 
 
-def environment(setups) -> dict:
+def environment(setups, quick: bool = False) -> dict:
     """What the numbers depend on (no times, no dates: those are in timings.json)."""
     from ..judgments.convergence import DEFAULT_STEPS, REFERENCE_RTOL
-    from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP
+    from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP, QUICK_CONVERGENCE_STEPS
     from . import mujoco_contact as mc
+    convergence_steps = QUICK_CONVERGENCE_STEPS if quick else DEFAULT_STEPS
     return {
         "packages": _versions(),
         "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "arch": platform.machine(),
                     "platform": platform.platform(terse=True)},
         "solvers": {s.label: s.settings for s in setups},
-        "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(DEFAULT_STEPS),
+        "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(convergence_steps),
                   "convergence_horizon_s": CONVERGENCE_HORIZON,
                   "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01,
                   "mujoco_contact_study": {"scenario": mc.SCENARIO, "model": mc.MODEL,
-                                           "at_time_s": mc.STUDY_TIME, "window_s": mc.WINDOW}},
+                                           "at_time_s": mc.STUDY_TIME,
+                                           "window_s": mc.QUICK_WINDOW if quick else mc.WINDOW}},
         "run_times": "timings.json (kept apart: they vary from run to run)",
     }
 
@@ -227,12 +229,12 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
             tasks.append(Task("mujoco-claims", mujoco_contact.claims_on_disc, (stab,),
                               0.4 * len(stab), "MuJoCo: the stability claims on thesis-disc"))
     if "pinocchio" in opts.engines and "exudyn" in opts.engines and "benchmark" in want:
-        builds = benchmark.QUICK_BUILDS if quick else benchmark.BUILDS
         tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (quick,), 1.5,
                           "benchmark terms"))
         for n in benchmark.MANOEUVRES:
+            builds = benchmark.quick_builds(n) if quick else benchmark.BUILDS
             tasks.append(Task(("benchmark", n), benchmark.benchmark_manoeuvre, (n, builds),
-                              4.0 if len(builds) > 1 else 2.5, f"benchmark {n}"))
+                              0.5 + 1.5 * len(builds), f"benchmark {n}"))
         if not quick:
             tasks.append(Task("benchmark-convergence", benchmark.benchmark_convergence, (), 6.0,
                               "benchmark: Exudyn convergence"))
@@ -397,7 +399,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "checks": checks,
         "initial_corrections": corrections,
         "expected_differences": _expected_differences(names, cases),
-        "environment": environment(setups),
+        "environment": environment(setups, opts.quick),
         "quick": opts.quick,
         "sections": list(opts.sections),
     }
