@@ -47,8 +47,10 @@ def quick_report(tmp_path_factory):
         if not status.exists():
             # the Exudyn-only sections (convergence, energy, disc builds) are tested directly
             # in test_exudyn and test_convergence: not run again here
+            # every figure drawn (--quick draws only failing sections' by default): the report
+            # tests read them
             status.write_text(str(main(["run", "--quick", "--sections", "terms,benchmark,faults",
-                                        "--out", str(out)])))
+                                        "--figures", "all", "--out", str(out)])))
     return out, int(status.read_text()), json.loads((out / "summary.json").read_text(encoding="utf-8"))
 
 

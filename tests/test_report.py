@@ -170,6 +170,32 @@ def test_quick_runs_exudyn_on_one_benchmark_manoeuvre_and_says_so(report):
             "benchmark-v4, benchmark-v8.") in text
 
 
+def test_figure_policy_names_what_it_does_not_draw():
+    """--figures failing keeps a failing section's figures and replaces a passing section's by
+    one line naming every one of them; none replaces them all. Planted: testing ``passed is
+    not True`` (a reported row counts as failing) keeps the passing section's figures."""
+    from comparisons.stages.pipeline import apply_figure_policy
+    from comparisons.stages.results import Figure, Section
+
+    def section(passed):
+        sec = Section("s")
+        sec.text("before")
+        sec.figure("a.png", "convergence")
+        sec.figure("b.png", "convergence")
+        sec.text("after")
+        sec.comparisons += [{"passed": passed}, {"passed": None}]
+        return sec
+
+    assert apply_figure_policy(section(False), "failing").figures != []
+    assert len(apply_figure_policy(section(True), "all").figures) == 2
+    for policy in ("failing", "none"):
+        out = apply_figure_policy(section(True), policy)
+        assert out.figures == [] and len(out.blocks) == 3
+        assert "`a.png`, `b.png`" in out.blocks[1].text and "--figures all" in out.blocks[1].text
+    assert apply_figure_policy(section(False), "none").figures == []
+    assert not isinstance(apply_figure_policy(section(True), "failing").blocks[1], Figure)
+
+
 def test_report_starts_with_the_verdict_then_claims_then_summary(report):
     """First screen: the verdict, then (no failures here) the claims, then the summary table;
     every figure drawn is linked."""
@@ -215,7 +241,7 @@ def test_same_inputs_give_the_same_report(tmp_path):
     report.md and figures; run times live only in timings.json."""
     a, b = tmp_path / "a", tmp_path / "b"
     small = ["run", "--quick", "--scenarios", "check", "--scenario-file",
-             str(_short_forward(tmp_path)), "--sections", "none"]
+             str(_short_forward(tmp_path)), "--sections", "none", "--figures", "all"]
     assert main([*small, "--jobs", "2", "--out", str(a)]) == 0
     assert main([*small, "--jobs", "1", "--out", str(b)]) == 0
     assert len(list((a / "figures").iterdir())) >= 3
@@ -236,7 +262,11 @@ def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["passed"] is False
     assert any(c["quantity"] == "mass_matrix" and c["passed"] is False for c in summary["comparisons"])
-    assert "## Where the engines disagree" in (out / "report.md").read_text()
+    text = (out / "report.md").read_text()
+    assert "## Where the engines disagree" in text
+    # --quick draws the figures of the sections where something failed: here, the scenarios'
+    assert summary["figures"] == "failing"
+    assert (out / "figures" / "zigzag_torques.png").is_file() and "Not drawn" not in text
 
 
 @pytest.mark.parametrize("args, needle", [

@@ -173,6 +173,7 @@ def cmd_run(args) -> int:
         raise UsageError(f"--sections: unknown section {unknown[0]!r}; choose from "
                          f"{', '.join(SECTIONS)} (comma-separated), or none for the scenarios only")
     opts = dataclasses.replace(opts, workers=args.jobs, sections=sections,
+                               figures=args.figures or "",
                                engine_options=_run_engine_options(opts.engines, args.engine_options))
     from .bicycles import with_models
     opts = with_models(opts, args.model, args.scenario_file)
@@ -287,6 +288,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="do not write data/<scenario>_<engine>.csv (the runs' samples)")
     s.add_argument("--no-html", action="store_true",
                    help="do not write report.html (report.md and summary.json only)")
+    from ..stages.results import FIGURE_POLICIES
+    s.add_argument("--figures", choices=FIGURE_POLICIES, default=None,
+                   help="which figures to draw: all, those of the sections where something "
+                        "failed, or none [failing with --quick, else all]")
     s.add_argument("--jobs", type=int, default=None,
                    help="worker processes [the machine's cores, never more than the stages]")
     s.add_argument("--tolerances", type=Path, default=None,

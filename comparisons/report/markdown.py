@@ -37,6 +37,12 @@ def _blocks(section: Section, level: int) -> list[str]:
     return out
 
 
+_FIGURES_SAID = {
+    "failing": "drawn only for the sections where a comparison failed (`--figures failing`, "
+               "the default of `--quick`); `--figures all` draws every one.",
+    "none": "none drawn (`--figures none`)."}
+
+
 def _verdict(summary: dict) -> list[str]:
     comps = summary["comparisons"]
     n_fail = sum(c["passed"] is False for c in comps)
@@ -60,6 +66,8 @@ def _verdict(summary: dict) -> list[str]:
         *[f"- **Dropped**: engine `{d['engine']}`: {d['reason']}" for d in dropped],
         f"- Engines: {', '.join(summary['engines'])}"
         f"{' (quick subset of scenarios and states)' if summary.get('quick') else ''}.",
+        *([f"- Figures: {_FIGURES_SAID[summary['figures']]}"]
+          if summary.get("figures", "all") != "all" else []),
         f"- {len(comps)} comparisons, {n_judged} judged against a tolerance, {n_fail} failed; "
         f"the rest are reported (the row says who judges them).",
         (f"- Fault injection: {len(faults)} fault-engine pairs, "

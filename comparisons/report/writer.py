@@ -45,7 +45,8 @@ def write_report(result, out: Path, data: bool = True, html: bool = True,
                  progress: Callable[[str], None] = lambda s: None) -> Path:
     """Write the report of ``result`` into ``out`` (a folder); returns the path of report.md."""
     pngs = draw_figures(result, result.options.workers)
-    progress(f"  {len(pngs)} figures drawn")
+    policy = result.summary.get("figures", "all")
+    progress(f"  {len(pngs)} figure(s) drawn" + ("" if policy == "all" else f" (--figures {policy})"))
     with ReportFolder(out) as folder:
         root = folder.path
         for name, png in pngs.items():

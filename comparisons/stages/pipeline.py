@@ -43,7 +43,7 @@ from engines.runs import Run
 from ..judgments.claims import judge_claims
 from ..judgments.summary import summary_table
 from .pool import Task, run_tasks
-from .results import Section
+from .results import FIGURE_POLICIES, Figure, Section, Text  # noqa: F401 - FIGURE_POLICIES re-exported
 
 QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
 #: the parts of a run besides the scenarios, selectable with --sections (all by default)
@@ -70,6 +70,11 @@ class Options:
     scenario_files: tuple[str, ...] = ()   # --scenario-file paths
     engine_options: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()   # spec -> options
     sections: tuple[str, ...] = SECTIONS   # which engine sections run besides the scenarios
+    figures: str = ""                 # FIGURE_POLICIES; "" = 'failing' with --quick, else 'all'
+
+    @property
+    def figure_policy(self) -> str:
+        return self.figures or ("failing" if self.quick else "all")
 
     def options_for(self) -> dict:
         return {spec: dict(opts) for spec, opts in self.engine_options}
@@ -378,6 +383,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         sections.append(faults.fault_section(fault_rows))
 
     comparisons = [c for s in sections for c in s.comparisons]
+    sections = [apply_figure_policy(sec, opts.figure_policy) for sec in sections]
     localization = faults.localization_lines(comparisons, by_label)
     failed = (any(c["passed"] is False for c in checks)
               or any(r["status"] == "failed" for r in rows)
@@ -401,6 +407,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "expected_differences": _expected_differences(names, cases),
         "environment": environment(setups, opts.quick),
         "quick": opts.quick,
+        "figures": opts.figure_policy,
         "sections": list(opts.sections),
     }
     if opts.models or opts.scenario_files:
@@ -415,6 +422,29 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                                      for (lab, n), r in sorted(runs.items())}
     timings["total_seconds"] = round(time.perf_counter() - t_start, 3)
     return ComparisonResult(opts, summary, sections, localization, runs, timings)
+
+
+def apply_figure_policy(sec: Section, policy: str) -> Section:
+    """``sec`` with the figures ``policy`` does not draw replaced by one line naming them, where
+    the first stood (the reader learns what exists and how to get it; nothing is left out
+    silently)."""
+    names = [f.name for f in sec.figures]
+    if not names or policy == "all" or (
+            policy == "failing" and any(c.get("passed") is False for c in sec.comparisons)):
+        return sec
+    why = ("`--figures failing`, the default of `--quick`, draws them where a comparison "
+           "failed, and nothing failed here" if policy == "failing" else "`--figures none`")
+    line = Text(f"*Not drawn ({why}; `--figures all` draws them): "
+                f"{', '.join(f'`{n}`' for n in names)}.*")
+    blocks, said = [], False
+    for b in sec.blocks:
+        if isinstance(b, Figure):
+            if not said:
+                blocks.append(line)
+                said = True
+        else:
+            blocks.append(b)
+    return dataclasses.replace(sec, blocks=blocks)
 
 
 def _expected_differences(names, cases) -> list[dict]:

@@ -51,6 +51,11 @@ class Figure:
 
 Block = Union[Text, Heading, Table, Figure]
 
+#: which figures a run draws (``bicycle-xval run --figures``): every one, those of the sections
+#: where a comparison failed (what a reader debugging a failure looks at; --quick's default, as
+#: a quick run that passes is read for its verdict), or none
+FIGURE_POLICIES = ("all", "failing", "none")
+
 
 @dataclass
 class Section:
