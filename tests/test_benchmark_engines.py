@@ -251,6 +251,9 @@ def test_benchmark_section_passes_and_draws(quick_report):
         assert (out / "figures" / fig).stat().st_size > 0
     outcomes = {(c["scenario"], c["engines"][0]): c["expected"] for c in sec
                 if c["quantity"].startswith("outcome")}
-    assert outcomes[("benchmark-v4", "exudyn-tree")] == "weave grows"
+    # --quick runs Exudyn on benchmark-v4.6 only (each engine's outcome on every manoeuvre is
+    # tested above on the `runs` fixture)
+    assert outcomes[("benchmark-v4", "reference")] == "weave grows"
     assert outcomes[("benchmark-v4.6", "reference")] == "weave decays"
-    assert outcomes[("benchmark-v8", "exudyn-tree")] == "slow capsize"
+    assert outcomes[("benchmark-v4.6", "exudyn-tree")] == "weave decays"
+    assert outcomes[("benchmark-v8", "reference")] == "slow capsize"

@@ -160,7 +160,7 @@ def model_run(tmp_path_factory):
     out = tmp / "report"
     code = main(["run", "--model", str(tri), "--scenario-file",
                  str(sc), "--scenarios", "check,benchmark-v4", "--engines", "reference", "--quick",
-                 "--jobs", "2", "--out", str(out)])
+                 "--figures", "all", "--jobs", "2", "--out", str(out)])
     return {"code": code, "out": out, "bike": bike, "tri": tri,
             "summary": json.loads((out / "summary.json").read_text()),
             "report": (out / "report.md").read_text()}
