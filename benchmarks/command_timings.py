@@ -27,8 +27,8 @@ COMMANDS = {   # key -> (arguments of `bicycle-xval`, what the row says)
 def _once(args: list[str], out: Path) -> tuple[float, float]:
     """(wall seconds, stage CPU seconds) of one run of ``bicycle-xval ARGS --out OUT``."""
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "comparisons.cli", *args, "--out", str(out),
-                           "--no-data"], cwd=ROOT, capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "comparisons.cli", *args, "--out", str(out)],
+                          cwd=ROOT, capture_output=True, text=True)   # CSVs and HTML as make report
     wall = time.perf_counter() - t0
     if proc.returncode not in (0, 1):   # 1: a check did not hold, still a complete run
         raise RuntimeError(f"bicycle-xval {' '.join(args)} exited {proc.returncode}: "
