@@ -34,7 +34,7 @@ def draw_figures(result, workers: int | None = None) -> dict[str, bytes]:
     from ..stages.pool import Task, run_tasks
     figs = [f for sec in result.sections for f in sec.figures]
     tasks = [Task(f.name, figures.draw_png, (f.kind, f.data), 1.0, f"figure {f.name}") for f in figs]
-    done = run_tasks(tasks, workers)
+    done = run_tasks(tasks, workers, warm=("matplotlib.pyplot",))
     failed = [f"{k}: {r.error}" for k, r in done.items() if r.error]
     if failed:
         raise RuntimeError(f"drawing a figure failed: {failed[0]}")

@@ -17,15 +17,16 @@ from dataclasses import dataclass
 from typing import Any, Callable, Hashable
 
 MAX_WORKERS = 8
-#: imported once in the main process before the workers fork, so each worker does not import
-#: them again (about a second of CPU per worker for the engines' libraries)
-WARM_IMPORTS = ("scipy.integrate", "pinocchio", "exudyn", "matplotlib.pyplot",
-                "engines.pinocchio", "engines.exudyn", "engines.kane")
+#: imported once in the main process before the stages' workers fork, so each worker does not
+#: import them again (about a second of CPU per worker for the engines' libraries); matplotlib
+#: is the figure pool's (`comparisons.report.writer`), not imported for runs that draw none
+WARM_IMPORTS = ("scipy.integrate", "pinocchio", "exudyn", "mujoco",
+                "engines.pinocchio", "engines.exudyn", "engines.kane", "engines.mujoco")
 
 
-def warm_imports() -> None:
+def warm_imports(names: tuple[str, ...] = WARM_IMPORTS) -> None:
     import importlib
-    for name in WARM_IMPORTS:
+    for name in names:
         try:
             importlib.import_module(name)
         except Exception:   # noqa: BLE001 - an engine's library may be absent: its stage says so
@@ -81,9 +82,11 @@ def default_workers(n_tasks: int) -> int:
 
 
 def run_tasks(tasks: list[Task], workers: int | None = None,
-              progress: Callable[[str], None] = lambda s: None) -> dict[Hashable, TaskResult]:
+              progress: Callable[[str], None] = lambda s: None,
+              warm: tuple[str, ...] = WARM_IMPORTS) -> dict[Hashable, TaskResult]:
     """Run every task; a task that raises becomes a `TaskResult` with ``error`` set (the
-    exception's type and message), never an aborted run."""
+    exception's type and message), never an aborted run. ``warm``: modules imported in this
+    process before the workers fork (they inherit them)."""
     if not tasks:
         return {}
     workers = min(workers or default_workers(len(tasks)), len(tasks))
@@ -97,7 +100,7 @@ def run_tasks(tasks: list[Task], workers: int | None = None,
         return results
     previous = signal.getsignal(signal.SIGTERM)
     signal.signal(signal.SIGTERM, raise_terminated)
-    warm_imports()
+    warm_imports(warm)
     pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
     try:
         pending = {pool.submit(_timed, t.func, t.args): t for t in order}
