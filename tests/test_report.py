@@ -194,6 +194,8 @@ def test_figure_policy_names_what_it_does_not_draw():
         assert "`a.png`, `b.png`" in out.blocks[1].text and "--figures all" in out.blocks[1].text
     assert apply_figure_policy(section(False), "none").figures == []
     assert not isinstance(apply_figure_policy(section(True), "failing").blocks[1], Figure)
+    with pytest.raises(ValueError, match="figure policy 'some': choose one of all, failing, none"):
+        apply_figure_policy(section(True), "some")
 
 
 def test_report_starts_with_the_verdict_then_claims_then_summary(report):

@@ -43,7 +43,7 @@ from engines.runs import Run
 from ..judgments.claims import judge_claims
 from ..judgments.summary import summary_table
 from .pool import Task, run_tasks
-from .results import FIGURE_POLICIES, Figure, Section, Text  # noqa: F401 - FIGURE_POLICIES re-exported
+from .results import FIGURE_POLICIES, Figure, Section, Text
 
 QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
 #: the parts of a run besides the scenarios, selectable with --sections (all by default)
@@ -428,6 +428,8 @@ def apply_figure_policy(sec: Section, policy: str) -> Section:
     """``sec`` with the figures ``policy`` does not draw replaced by one line naming them, where
     the first stood (the reader learns what exists and how to get it; nothing is left out
     silently)."""
+    if policy not in FIGURE_POLICIES:
+        raise ValueError(f"figure policy {policy!r}: choose one of {', '.join(FIGURE_POLICIES)}")
     names = [f.name for f in sec.figures]
     if not names or policy == "all" or (
             policy == "failing" and any(c.get("passed") is False for c in sec.comparisons)):
