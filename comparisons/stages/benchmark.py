@@ -267,7 +267,8 @@ def _manoeuvre_part(sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> No
                "max error to the horizon [rad, m]", f"first past {DIVERGED:g}", "max abs C [m, m/s]",
                "drift [% of E0]"), rows)
     sec.figure("benchmark_roll.png", "lean_panels", panels=panels, ylabel="theta (lean) [rad]")
-    sec.figure("benchmark_error.png", "error_panels", panels=error_panels, threshold=DIVERGED)
+    if error_panels:   # none when no manoeuvre ran on Exudyn
+        sec.figure("benchmark_error.png", "error_panels", panels=error_panels, threshold=DIVERGED)
     alone = [mr.scenario.name for mr in runs if not mr.exudyn]
     if alone:
         sec.text(f"Run on the reference only (`--quick`: Exudyn runs "
