@@ -62,8 +62,8 @@ from typing import Any
 import numpy as np
 
 from .params import NAMED_MODELS
-from .scenarios import (FORWARD_QUANTITIES, INVERSE_QUANTITIES, MOTIONS, QUANTITIES,
-                        TORQUE_FUNCTIONS, ExpectedDifference, Scenario, TorqueSamples)
+from .scenario_types import (FORWARD_QUANTITIES, INVERSE_QUANTITIES, MOTIONS, QUANTITIES,
+                             TORQUE_FUNCTIONS, ExpectedDifference, Scenario, TorqueSamples)
 from .solvers import CONSTRAINT_HANDLING, DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE
 
 __all__ = ["BUILTIN_DIR", "ScenarioFileError", "load_builtin_scenarios", "load_scenario",
