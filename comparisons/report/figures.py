@@ -95,18 +95,27 @@ def error_vs_time(curves, horizon, threshold, title):
     return fig
 
 
-def convergence(curves, horizon, title):
+def _loglog_study(points, guide, xlabel, ylabel, title):
+    """A study on log-log axes: each curve's points (x, y, label) as dots joined by lines, and
+    a dashed guide (x, y, label): an order of convergence, a tolerance."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(WIDTH * 0.75, 4.2))
-    for c in curves:
-        ax.loglog(c["steps"], c["errors"], "o-", label=c["label"])
-    h = np.array(curves[0]["steps"]) if curves else np.array([1e-3])
-    ax.loglog(h, 120 * h**2, "k--", lw=0.8, label="slope 2 (second order)")
-    ax.set_xlabel("step h [s]")
-    ax.set_ylabel(f"max error up to {horizon} s [rad or m]")
+    for x, y, label in points:
+        ax.loglog(x, y, "o-", label=label)
+    gx, gy, glabel = guide
+    ax.loglog(gx, gy, "k--", lw=0.8, label=glabel)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.legend(fontsize=7)
     return fig
+
+
+def convergence(curves, horizon, title):
+    h = np.array(curves[0]["steps"]) if curves else np.array([1e-3])
+    return _loglog_study([(c["steps"], c["errors"], c["label"]) for c in curves],
+                         (h, 120 * h**2, "slope 2 (second order)"), "step h [s]",
+                         f"max error up to {horizon} s [rad or m]", title)
 
 
 def lean_panels(panels, ylabel):
@@ -145,18 +154,13 @@ def error_panels(panels, threshold):
 
 
 def nonlinear_fits(curves, coefficient, floor):
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(WIDTH * 0.75, 4.2))
-    for c in curves:
-        ax.loglog(c["a"], c["deviation"], "o-", label=c["label"])
     aa = np.logspace(-4.5, -0.7, 20)
-    ax.loglog(aa, coefficient * aa**2 + floor, "k--", lw=0.8,
-              label=f"tolerance {coefficient:g} a² + {floor:.0e}")
-    ax.set_xlabel("amplitude a = max |theta|, |gamma| [rad]")
-    ax.set_ylabel("|fitted - linear| / |linear| [-]")
-    ax.set_title("eigenvalues from nonlinear runs against the linearization")
-    ax.legend(fontsize=7)
-    return fig
+    return _loglog_study([(c["a"], c["deviation"], c["label"]) for c in curves],
+                         (aa, coefficient * aa**2 + floor,
+                          f"tolerance {coefficient:g} a² + {floor:.0e}"),
+                         "amplitude a = max |theta|, |gamma| [rad]",
+                         "|fitted - linear| / |linear| [-]",
+                         "eigenvalues from nonlinear runs against the linearization")
 
 
 def eigenvalues(v, re, im, weave, capsize, model):
@@ -356,18 +360,12 @@ def contact_run(t, error, horizon, slip, penetration, normal, ideal_normal, titl
 
 def refinement(curves, at_time, title):
     """Errors against a refined contact parameter, log-log, with a first-order guide."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(WIDTH * 0.75, 4.2))
-    for c in curves:
-        ax.loglog(c["values"], c["errors"], "o-", label=c["label"])
     v = np.array(curves[0]["values"])
     e = np.array(curves[0]["errors"])
-    ax.loglog(v, e[-1] * v / v[-1], "k--", lw=0.8, label="slope 1 (first order)")
-    ax.set_xlabel("refined value (time constant or timestep) [s]")
-    ax.set_ylabel(f"max error at {at_time:g} s [rad or m]")
-    ax.set_title(title)
-    ax.legend(fontsize=7)
-    return fig
+    return _loglog_study([(c["values"], c["errors"], c["label"]) for c in curves],
+                         (v, e[-1] * v / v[-1], "slope 1 (first order)"),
+                         "refined value (time constant or timestep) [s]",
+                         f"max error at {at_time:g} s [rad or m]", title)
 
 
 DRAWINGS: dict[str, Callable] = {f.__name__: f for f in (

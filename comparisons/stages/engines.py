@@ -40,6 +40,11 @@ QUICK_FORWARD = ("stability-psid5",)
 #: verdict needs (`convergence.MIN_SPAN`) at half the steps (the finest costs as much as the
 #: other three together)
 QUICK_CONVERGENCE_STEPS = tuple(2 * h for h in DEFAULT_STEPS)
+
+
+def convergence_steps(quick: bool) -> tuple[float, ...]:
+    """The Exudyn convergence study's steps in a quick or a full run."""
+    return QUICK_CONVERGENCE_STEPS if quick else DEFAULT_STEPS
 DIVERGED = 1e-6             # rad or m: 'first past' threshold of the trajectory tables
 
 
@@ -203,7 +208,7 @@ def merge_trajectories(parts: list[TrajectoryPart]) -> Section:
 # -- Exudyn: convergence order ---------------------------------------------------------------
 
 def exudyn_convergence(quick: bool) -> Section:
-    steps = QUICK_CONVERGENCE_STEPS if quick else DEFAULT_STEPS
+    steps = convergence_steps(quick)
     sec = Section("Exudyn convergence: integrator error or model difference?")
     sec.text(f"stability-psid10 up to {CONVERGENCE_HORIZON} s at four steps"
              + (" (`--quick`: each twice the full run's, and without the thesis-contact tree)"

@@ -51,6 +51,11 @@ MODEL = "thesis-disc"
 STUDY_TIME = 0.3        # s: psid10 before the steer runs away and before any wheel unloads
 WINDOW = 0.6            # s: the default run, past the first lift-off (about 0.45 s)
 QUICK_WINDOW = 0.5
+
+
+def window(quick: bool) -> float:
+    """The contact study's window (s) in a quick or a full run."""
+    return QUICK_WINDOW if quick else WINDOW
 # (solref time constant, timestep) pairs; each series spans 8x (convergence.MIN_SPAN)
 TC_WITH_STEP = (1e-3, 5e-4, 2.5e-4, 1.25e-4)            # timestep = tc / 2
 QUICK_TC_WITH_STEP = (2e-3, 1e-3, 5e-4, 2.5e-4)
@@ -118,10 +123,10 @@ def _settings_rows(s: dict) -> list[tuple[str, str]]:
 def mujoco_contact(quick: bool) -> Section:
     """The contact study (module docstring) as a report section."""
     sec = Section("MuJoCo contact study: soft contact against ideal rolling")
-    window = QUICK_WINDOW if quick else WINDOW
-    model, sc, ref, hor = _reference(window)
+    window_s = window(quick)
+    model, sc, ref, hor = _reference(window_s)
     eng = load_engine("mujoco", model)
-    run = eng.simulate(sc, t_end=window)
+    run = eng.simulate(sc, t_end=window_s)
     s = run.settings
     sec.text(f"MuJoCo {s['mujoco_version']} with its own wheel-ground contact, on `{MODEL}` "
              f"(MuJoCo's rolling cylinder approximates the rolling disc; the thesis's fork-axis "

@@ -149,21 +149,20 @@ def _cpu() -> str:
 
 def environment(setups, quick: bool = False) -> dict:
     """What the numbers depend on (no times, no dates: those are in timings.json)."""
-    from ..judgments.convergence import DEFAULT_STEPS, REFERENCE_RTOL
-    from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP, QUICK_CONVERGENCE_STEPS
+    from ..judgments.convergence import REFERENCE_RTOL
+    from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP, convergence_steps
     from . import mujoco_contact as mc
-    convergence_steps = QUICK_CONVERGENCE_STEPS if quick else DEFAULT_STEPS
     return {
         "packages": _versions(),
         "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "arch": platform.machine(),
                     "platform": platform.platform(terse=True)},
         "solvers": {s.label: s.settings for s in setups},
-        "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(convergence_steps),
+        "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(convergence_steps(quick)),
                   "convergence_horizon_s": CONVERGENCE_HORIZON,
                   "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01,
                   "mujoco_contact_study": {"scenario": mc.SCENARIO, "model": mc.MODEL,
                                            "at_time_s": mc.STUDY_TIME,
-                                           "window_s": mc.QUICK_WINDOW if quick else mc.WINDOW}},
+                                           "window_s": mc.window(quick)}},
         "run_times": "timings.json (kept apart: they vary from run to run)",
     }
 
