@@ -9,7 +9,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 STAMP = $(VENV)/.installed
 
-.PHONY: venv test report example bench clean mutants
+.PHONY: venv test test-bicycles report example bench clean mutants
 
 venv: $(STAMP)
 
@@ -21,7 +21,13 @@ $(STAMP): pyproject.toml $(VENV)/bin/python
 	touch $(STAMP)
 
 test: $(STAMP)
-	$(VENV)/bin/python -m pytest -n auto --durations=5
+	$(VENV)/bin/python -m pytest -n auto --durations=5 -m "not bicycles"
+
+# The ten measured bicycles BicycleParameters ships, end to end (import, run --quick --model on
+# every default engine, diagnose): the heaviest study (~450 stages, minutes), kept out of
+# `make test`'s 90 s; .ci/run runs both.
+test-bicycles: $(STAMP)
+	$(VENV)/bin/python -m pytest -n auto -m bicycles tests/test_real_bicycles.py
 
 report: $(STAMP)
 	$(VENV)/bin/bicycle-xval run --out reports/latest

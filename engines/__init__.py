@@ -14,7 +14,7 @@ this project's pyproject.toml, like any third party's); `engines.registry` finds
 from __future__ import annotations
 
 from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError, EngineLoadError,
-                   EngineSpecError, EngineUsageError)
+                   EngineSpecError, EngineUsageError, UnsupportedModel)
 from .loading import (EngineInfo, LoadedEngines, engine_info, load_engine, load_engines,
                       parse_engine_options, split_options)
 from .registry import GROUP, available_engines
@@ -25,5 +25,5 @@ ENGINES = ("reference", "pinocchio", "exudyn")
 
 __all__ = ["CAPABILITIES", "CONTACTS", "ENGINES", "GROUP", "CapabilityError", "Engine",
            "EngineError", "EngineInfo", "EngineLoadError", "EngineSpecError", "EngineUsageError", "LoadedEngines",
-           "available_engines", "engine_info", "load_engine", "load_engines",
+           "UnsupportedModel", "available_engines", "engine_info", "load_engine", "load_engines",
            "parse_engine_options", "split_options"]

@@ -54,6 +54,14 @@ class EngineLoadError(EngineError):
     built. The CLI exits 1; a run drops the engine and reports why (`engines.load_engines`)."""
 
 
+class UnsupportedModel(EngineLoadError):
+    """A declared limitation: the engine cannot represent this model (a front contact it does
+    not model, or a body MuJoCo's compiler refuses: principal moments that break A + B >= C).
+    Not a failure of the engine: a run lists it as "not run on this model: <reason>" and goes
+    on. Raise it from ``__init__`` with the reason; the loader raises it for an unsupported
+    contact."""
+
+
 class EngineUsageError(EngineSpecError, ValueError):
     """An engine option the user gave is invalid (unknown build, a time step that does not
     divide the output grid...): a usage error, exit status 2 in the CLI. Still an
@@ -70,6 +78,11 @@ class Engine:
     name: str = "engine"
     capabilities: frozenset[str] = frozenset()
     contacts: tuple[str, ...] = CONTACTS
+    #: a declared model difference of the engine's forward runs against the reference's ideal
+    #: rolling (e.g. a soft wheel-ground contact), or None. A run of such an engine is never
+    #: judged by the ideal-rolling tolerances: its departures (slip, penetration, error up to
+    #: the meaningful horizon, lift-off) are measured and reported as that difference.
+    run_difference: str | None = None
 
     def __init__(self, model: Model):
         self.model = model

@@ -17,7 +17,8 @@ import inspect
 from dataclasses import dataclass
 from typing import Any, Mapping, NamedTuple, Sequence
 
-from .base import CAPABILITIES, Engine, EngineError, EngineLoadError, EngineSpecError
+from .base import (CAPABILITIES, Engine, EngineError, EngineLoadError, EngineSpecError,
+                   UnsupportedModel)
 from .registry import _one_line, _resolve_target, _who, registrations, resolve
 
 
@@ -99,13 +100,16 @@ def load_engine(spec: str, model, **options) -> Engine:
     contacts = tuple(getattr(cls, "contacts", ()) or ())
     contact = getattr(model, "contact", None)
     if contact not in contacts:
-        raise EngineLoadError(f"{_who(label, spec)} supports the front-contact models "
+        raise UnsupportedModel(f"{_who(label, spec)} supports the front-contact models "
                               f"{', '.join(contacts) or 'none'}, not {contact!r} of model "
                               f"{getattr(model, 'name', '?')!r}")
     try:
         engine = cls(model, **options)
     except EngineSpecError as exc:   # keep the class (EngineUsageError is one): callers match it
         raise type(exc)(f"{_who(label, spec)}: {exc}") from exc
+    except UnsupportedModel as exc:   # a declared limitation, not a failure
+        raise UnsupportedModel(f"{_who(label, spec)} cannot represent model "
+                               f"{getattr(model, 'name', '?')!r}: {_one_line(exc)}") from exc
     except Exception as exc:  # noqa: BLE001 - report any failure of the engine's constructor
         raise EngineLoadError(f"{_who(label, spec)} raised while being built: "
                               f"{type(exc).__name__}: {_one_line(exc)}") from exc

@@ -37,7 +37,8 @@ from reference_model.solvers import Trajectory
 from .convergence import MIN_SPAN, NO_SHRINK_ORDER, REFERENCE_FLOOR, error_vs_time, fit_order
 
 __all__ = ["PENETRATION_KEYS", "SLIP_KEYS", "ContactFidelity", "Refinement", "contact_fidelity",
-           "error_at", "local_orders", "refinement_study"]
+           "declared_difference_rows", "error_at", "lift_off_time", "local_orders",
+           "refinement_study"]
 
 WHEELS = ("rear", "front")
 SLIP_KEYS = tuple(f"slip_speed_{w}" for w in WHEELS)          # m/s
@@ -220,3 +221,65 @@ def refinement_study(ref: Trajectory, runs: Sequence[tuple[float, Trajectory]], 
     verdict, why = _refinement_verdict(values, errors, order)
     return Refinement(parameter, held, float(at_time), tuple(values), tuple(errors),
                       tuple(slips), tuple(pens), order, intercept, verdict, why)
+
+
+def lift_off_time(run: Trajectory) -> float | None:
+    """The first sample time after the start at which a wheel carries no load (the engine's
+    recorded normal force ``normal_force_rear``/``normal_force_front`` is zero or less), or
+    None (no lift-off, or the engine records no normal forces)."""
+    d = getattr(run, "diagnostics", None) or {}
+    if "normal_force_rear" not in d or "normal_force_front" not in d:
+        return None
+    unloaded = np.minimum(np.asarray(d["normal_force_rear"], dtype=float),
+                          np.asarray(d["normal_force_front"], dtype=float)) <= 0.0
+    unloaded[0] = False
+    k = np.flatnonzero(unloaded)
+    return float(run.t[k[0]]) if k.size else None
+
+
+def declared_difference_rows(ref, run, horizon, difference: str, constraint_max: float | None,
+                             constraint_where: str) -> list[dict]:
+    """The comparisons of a forward run whose engine declares a model difference of its runs
+    (``difference``, e.g. a soft contact) against the reference's ideal rolling: measured and
+    reported, never judged by the ideal-rolling tolerances.
+
+    ``ref``, ``run``: `engines.runs.Run` of the reference and the engine; ``horizon``: the
+    scenario's meaningful horizon (`convergence.Horizon`); ``constraint_max``: the largest
+    |C| of the run as the reference measures it (m or m/s), None without samples. Rows: the
+    trajectory error up to the horizon, the constraint residual, and, where the engine records
+    them, the contact's slip, penetration and the first lift-off (`contact_fidelity`,
+    `lift_off_time`)."""
+    note = f"reported, not judged: a declared model difference ({difference})"
+    base = {"scenario": run.scenario, "model": run.model, "tolerance": None, "passed": None,
+            "declared_difference": difference, "note": note,
+            "why": "declared model difference"}
+    rows = [dict(base, quantity="constraint_residual", engines=[run.engine],
+                 max_error=constraint_max, localized_to=constraint_where)]
+    traj = run.trajectory
+    if not run.t.size or ref.trajectory is None or traj is None:
+        return rows
+    lift = lift_off_time(traj)
+    upto = min(float(horizon.t), run.t_end, ref.t_end)
+    err = error_vs_time(ref.trajectory, traj, COORDINATES, upto)
+    worst = np.stack([err[c] for c in COORDINATES], axis=1).max(axis=0)
+    rows.append(dict(base, quantity="trajectory", engines=[ref.engine, run.engine],
+                     max_error=float(err["max"].max()), horizon=float(horizon.t),
+                     horizon_reason=horizon.reason, lift_off_s=lift,
+                     localized_to=f"largest: {COORDINATES[int(np.argmax(worst))]}, up to the "
+                                  f"meaningful horizon {horizon.t:.2f} s"
+                                  + (f"; a wheel lifts off at {lift:.2f} s" if lift is not None
+                                     else "")))
+    diag = getattr(traj, "diagnostics", None) or {}
+    if all(k in diag for k in SLIP_KEYS + PENETRATION_KEYS):
+        fid = contact_fidelity(ref.trajectory, traj, horizon=upto)
+        rows.append(dict(base, quantity="contact fidelity (slip, penetration, trajectory)",
+                         engines=[ref.engine, run.engine], max_error=fid.error_max,
+                         horizon=fid.horizon, slip_max=fid.slip_max, slip_rms=fid.slip_rms,
+                         penetration_max=fid.penetration_max,
+                         penetration_rms=fid.penetration_rms, lift_off_s=lift,
+                         localized_to=f"slip max {fid.slip_max:.1e} m/s ({fid.slip_worst}), "
+                                      f"penetration max {fid.penetration_max:.1e} m up to "
+                                      f"{fid.horizon:.2f} s"
+                                      + (f"; lift-off at {lift:.2f} s" if lift is not None
+                                         else "; no lift-off")))
+    return rows

@@ -72,16 +72,17 @@ def free_roll_model(model: Model) -> Model:
 
 
 def free_roll_scenario(psi_dot: float = 10.0, duration: float = FREE_ROLL_DURATION,
-                       sample: float = FREE_ROLL_SAMPLE, model: str = "thesis-disc") -> Scenario:
-    """Torque-free run from the stability study's start (theta = gamma = pi/16) at
+                       sample: float = FREE_ROLL_SAMPLE, model: str = "thesis-disc",
+                       lean: float = np.pi / 16) -> Scenario:
+    """Torque-free run from the stability study's start (theta = gamma = ``lean``, pi/16) at
     psi_dot(0) = ``psi_dot``; use with `free_roll_model` (no drag) so energy is conserved."""
     n = int(round(duration / sample)) + 1
     return Scenario(
         name=f"free-roll-psid{psi_dot:g}",
-        description=(f"torque-free, drag-free roll: leaned and steered by pi/16, "
+        description=(f"torque-free, drag-free roll: leaned and steered by {lean:.4g} rad, "
                      f"psi_dot(0) = {psi_dot:g} rad/s, {duration:g} s (energy conservation)"),
         kind="forward", model=model, grid=(0.0, float(sample), n),
-        q0=(0, 0, 0, np.pi / 16, 0, 0, np.pi / 16, 0), dq_ind0=(0.0, float(psi_dot), 0.0),
+        q0=(0, 0, 0, float(lean), 0, 0, float(lean), 0), dq_ind0=(0.0, float(psi_dot), 0.0),
         torques=(0.0, 0.0, 0.0), constraints="projection", tags=("energy",))
 
 

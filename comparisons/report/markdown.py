@@ -61,6 +61,7 @@ def _verdict(summary: dict) -> list[str]:
     else:
         head = "Something failed (below)."
     unobservable = sum(f["verdict"] == "not observable" for f in faults)
+    not_run = sum(f['verdict'] == 'not run' for f in faults)
     return [
         f"**{head}**", "",
         *[f"- **Dropped**: engine `{d['engine']}`: {d['reason']}" for d in dropped],
@@ -72,7 +73,9 @@ def _verdict(summary: dict) -> list[str]:
         f"the rest are reported (the row says who judges them).",
         (f"- Fault injection: {len(faults)} fault-engine pairs, "
          f"{sum(f['verdict'] == 'localized' for f in faults)} detected and localized"
-         + (f", {unobservable} not observable by the engine" if unobservable else "") + "."
+         + (f", {unobservable} not observable by the engine" if unobservable else "")
+         + (f", {not_run} not run (the engine cannot represent that bicycle: a declared "
+            "limitation)" if not_run else "") + "."
          if "engine_sections" not in summary else
          f"- Fault injection and the engine sections: {summary['engine_sections']}."),
         "- The thesis's claims: " + (", ".join(f"{v} {k}" for k, v in sorted(verdicts.items()))
@@ -99,7 +102,8 @@ def _models(summary: dict) -> list[str]:
 def _failures(summary: dict, localization) -> list[str]:
     bad = [c for c in summary["comparisons"] if c["passed"] is False]
     bad_checks = [c for c in summary["checks"] if not c["passed"]]
-    bad_faults = [f for f in summary["faults"] if f["verdict"] not in ("localized", "not observable")]
+    bad_faults = [f for f in summary["faults"]
+                  if f["verdict"] not in ("localized", "not observable", "not run")]
     if not (bad or bad_checks or bad_faults or localization):
         return []
     out = ["## Failures", ""]

@@ -21,7 +21,8 @@ def fault_base(engine: str) -> str:
     return "thesis" if "thesis" in getattr(resolve(engine)[0], "contacts", ()) else "thesis-disc"
 
 
-def fault_entries(engine: str) -> list[dict]:
+def fault_entries(engine: str, model: str | None = None, n_states: int | None = None
+                  ) -> list[dict]:
     """The fault suite against one engine (a stage: worker processes call it). Pinocchio
     computes every term, so every fault must be detected and localized on it; the Exudyn tree
     gives only M and the generalized forces, and MuJoCo M, the inverse dynamics and gravity, so
@@ -30,12 +31,22 @@ def fault_entries(engine: str) -> list[dict]:
     missed. Kane's engine gives M, the generalized forces, D and dD dq of the disc-contact
     thesis bicycle: every fault is observable in its terms (the contact switch turns the broken
     reference's contact into the thesis's)."""
+    from engines import UnsupportedModel
+    from reference_model import load_model
     entries = []
-    base = fault_base(engine)
-    for r in run_fault_suite(engines=(engine,), base=base):
+    base = fault_base(engine) if model is None else model
+    name = load_model(base).name
+    kwargs = {} if n_states is None else {"n_states": n_states}
+    try:
+        results = run_fault_suite(engines=(engine,), base=base, **kwargs)
+    except UnsupportedModel as exc:   # the engine cannot represent this bicycle: declared
+        return [{"fault": "-", "engine": engine, "model": name, "detected": None,
+                 "localized_to": "-", "expected": "-", "correct": None, "observable": False,
+                 "evidence": f"not run on this model: {exc}", "verdict": "not run"}]
+    for r in results:
         d = r.to_dict()
         d["engine"] = engine
-        d["model"] = base
+        d["model"] = name
         d["verdict"] = ("localized" if r.correct else "not observable" if not r.observable
                         else "detected, mislocalized" if r.detected else "missed")
         entries.append(d)
@@ -55,16 +66,20 @@ def fault_section(entries: list[dict]) -> Section:
     sec.table(("fault", "engine", "detected", "localized to", "expected", "verdict", "evidence"),
               [(e["fault"], e["engine"] + (f" ({e['model']})" if e.get("model", "thesis") != "thesis"
                                              else ""),
-                "yes" if e["detected"] else "no", e["localized_to"],
+                "-" if e["detected"] is None else "yes" if e["detected"] else "no",
+                e["localized_to"],
                 e["expected"], e["verdict"], e["evidence"]) for e in entries])
     return sec
 
 
-def localization_lines(comparisons, setups: dict) -> list[tuple[str, str]]:
+def localization_lines(comparisons, setups: dict, specs: dict | None = None
+                       ) -> list[tuple[str, str]]:
     """For every (model, engine) whose terms or inverse dynamics failed a tolerance: a heading
     and the localization (`diagnose.localize`): which terms, which entries, and the parameter
     or structural cause (with its body) that best explains the difference. Empty when
-    everything agrees."""
+    everything agrees. ``specs``: a model's name -> its spec (a user's file) where the name
+    alone does not load it."""
+    from engines import UnsupportedModel
     from reference_model import load_model
     from ..judgments.diagnose import localize
     from ..judgments.terms import random_states
@@ -75,7 +90,11 @@ def localization_lines(comparisons, setups: dict) -> list[tuple[str, str]]:
     for model_name, engine in pairs:
         if engine not in setups:
             continue
-        model = load_model(model_name)
-        loc = localize(model, random_states(16, seed=11), [setups[engine].build(model)])
+        try:
+            model = load_model((specs or {}).get(model_name, model_name))
+            built = setups[engine].build(model)
+        except (UnsupportedModel, ValueError, OSError):   # nothing to localize against
+            continue
+        loc = localize(model, random_states(16, seed=11), [built])
         out.append((f"{model_name}: reference vs {engine}", loc.describe()))
     return out

@@ -111,7 +111,7 @@ def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
     picklable arguments: worker processes call it."""
     import dataclasses
 
-    from engines import EngineLoadError
+    from engines import UnsupportedModel
     from engines.registry import resolve
     from reference_model import load_model
     from reference_model.scenarios import get_scenario
@@ -125,12 +125,11 @@ def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
         return run_scenario(label, None, model, sc, setup.kinds)
     try:
         engine = None if (label == "reference" and sc.kind == "inverse") else setup.build(model)
-    except EngineLoadError:
+    except UnsupportedModel as exc:   # a declared limitation: not run, and why
         cls = resolve(setup.engine)[0]
-        if model.contact in getattr(cls, "contacts", ()):
-            raise
-        return Run(label, sc.name, model.name, sc.kind, "not run",   # not run, and why
-                   _contact_reason(cls, setup, model), 0.0)
+        why = (_contact_reason(cls, setup, model) if model.contact not in
+               getattr(cls, "contacts", ()) else f"not run on this model: {exc}")
+        return Run(label, sc.name, model.name, sc.kind, "not run", why, 0.0)
     return run_scenario(label, engine, model, sc, setup.kinds)
 
 

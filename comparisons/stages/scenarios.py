@@ -15,8 +15,10 @@ from reference_model import CONSTRAINT_NAMES, load_model
 from reference_model.scenarios import get_scenario
 
 from ..judgments.convergence import HORIZON_THRESHOLD, reference_horizon
+from ..judgments.contact import declared_difference_rows
 from ..judgments.scenario_compare import (compare_constraints, compare_forward, compare_inverse,
-                                          compare_mass_matrix, constraint_series)
+                                          compare_mass_matrix, constraint_series,
+                                          trajectory_error)
 from ..judgments.tolerances import load_tolerances
 from .results import Section, num, verdict_word
 
@@ -63,18 +65,31 @@ def reference_rows(names, runs: dict, cases: dict | None = None
     return rows, checks, corrections
 
 
-def _build_if_it_models(setup, model):
-    """The engine built from ``model``, or None when it does not model ``model``'s front
-    contact (Kane's: the disc only; it has no M to compare here, its runs are 'not run'
-    with why)."""
-    from engines import EngineLoadError
-    from engines.registry import resolve
+def _build_if_it_models(setup, model, failures: list[dict]):
+    """The engine built from ``model``, or None when it cannot represent ``model`` (a declared
+    limitation: a front contact it does not model, a body it cannot compile; its runs say
+    'not run' with why) or raises while being built (a failure of that engine, appended to
+    ``failures`` as a comparison row, so the verdict counts it and every other engine's
+    results stay)."""
+    from engines import UnsupportedModel
     try:
         return setup.build(model)
-    except EngineLoadError:
-        if model.contact in getattr(resolve(setup.engine)[0], "contacts", ()):
-            raise
+    except UnsupportedModel:
         return None
+    except Exception as exc:   # noqa: BLE001 - an engine failure is a result, not a crash
+        failures.append({"quantity": "engine build", "scenario": "-", "model": model.name,
+                         "engines": [setup.label], "max_error": None, "tolerance": None,
+                         "passed": False,
+                         "localized_to": f"{type(exc).__name__}: {' '.join(str(exc).split())[:300]}",
+                         "note": f"{setup.label} raised while being built on {model.name}"})
+        return None
+
+
+def run_difference(setup) -> str | None:
+    """The model difference the setup's engine declares for its forward runs (a soft contact),
+    or None (`engines.base.Engine.run_difference`)."""
+    from engines.registry import resolve
+    return getattr(resolve(setup.engine)[0], "run_difference", None)
 
 
 def _scenario(name: str, cases: dict | None):
@@ -109,7 +124,7 @@ def compare_scenarios(names, setups: dict, runs: dict, horizons: dict, cases: di
             engines = {}
             for lab in labels:
                 if lab != "reference" and (lab, sc.model) not in built:
-                    built[(lab, sc.model)] = _build_if_it_models(setups[lab], model)
+                    built[(lab, sc.model)] = _build_if_it_models(setups[lab], model, comps)
                 if lab != "reference" and built[(lab, sc.model)] is not None:
                     engines[lab] = built[(lab, sc.model)]
             comps += compare_mass_matrix(name, model, ref.q[::step], engines, tols)
@@ -124,12 +139,23 @@ def compare_scenarios(names, setups: dict, runs: dict, horizons: dict, cases: di
         hor = horizons[name]
         errors, lines = {}, {}
         for lab, r in here.items():
-            if "constraint_residual" in sc.compared:
+            declared = run_difference(setups[lab]) if lab != "reference" else None
+            if declared is not None:   # never judged by the ideal-rolling tolerances
+                c = compare_constraints(model, r, tols)
+                rows = declared_difference_rows(ref, r, hor, declared, c["max_error"],
+                                                c["localized_to"])
+                comps += [x for x in rows if x["quantity"] != "trajectory"
+                          or "trajectory" in sc.compared]
+            elif "constraint_residual" in sc.compared:
                 comps.append(compare_constraints(model, r, tols))
             if r.t.size:
                 C = constraint_series(model, r)
                 lines[lab] = (r.t, C[:, 0], C[:, 1:].max(axis=1))
             if lab == "reference" or "trajectory" not in sc.compared or not r.t.size:
+                continue
+            if declared is not None:
+                te = trajectory_error(ref, r, hor.t)
+                errors[lab] = (te.t, te.errors.max(axis=1) if te.t.size else te.t)
                 continue
             judged = ("auto" if setups[lab].engine in ("pinocchio", "exudyn", "kane")
                       else "trajectory_conformance")

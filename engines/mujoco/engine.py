@@ -42,7 +42,7 @@ import numpy as np
 from reference_model import COORDINATES, Model
 from reference_model.export_mjcf import MjcfSettings, massless_links, mjcf_text
 
-from ..base import CapabilityError, Engine, EngineError, EngineUsageError
+from ..base import CapabilityError, Engine, EngineError, EngineUsageError, UnsupportedModel
 from .options import tuple_option
 
 try:
@@ -60,8 +60,13 @@ def compile_mjcf(text: str, links: tuple[str, ...]) -> "mujoco.MjModel":
     try:
         m = mujoco.MjModel.from_xml_string(text)
     except ValueError as exc:
-        raise EngineError(f"MuJoCo did not compile the bicycle's MJCF: {' '.join(str(exc).split())}"
-                          ) from exc
+        text = " ".join(str(exc).split())
+        if "inertia must satisfy" in text:   # a body MuJoCo cannot represent: declared limitation
+            raise UnsupportedModel(
+                "MuJoCo requires every body's principal moments of inertia to satisfy the "
+                "triangle inequality A + B >= C, and this bicycle's measured inertia breaks it "
+                f"(MuJoCo's compiler: {text})") from exc
+        raise EngineError(f"MuJoCo did not compile the bicycle's MJCF: {text}") from exc
     for name in links:
         b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
         m.body_mass[b] = 0.0
@@ -78,6 +83,9 @@ class MujocoEngine(Engine):
 
     name = "mujoco"
     capabilities = frozenset(TERMS | {"simulate"})
+    run_difference = ("soft contact: MuJoCo's wheels touch the ground through a soft, frictional, "
+                      "unilateral contact, not the reference's ideal rolling constraint (they "
+                      "slip, sink and can lift off)")
     #: the conformance checks MuJoCo is expected to fail, with the reason (read by the plugin)
     conformance_xfails = Path(__file__).with_name("conformance_xfails.txt")
 
