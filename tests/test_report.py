@@ -151,7 +151,8 @@ def test_kane_terms_pass_on_the_disc_model_and_are_not_run_on_the_thesis_contact
     assert all(c["model"] == "thesis-disc" and c["passed"] for c in terms)
     text = (out / "report.md").read_text()
     assert "## Reference vs kane, term by term" in text
-    assert "| thesis | - | - | - | not run | EngineLoadError: engine 'kane'" in text
+    assert "| thesis | - | - | - | not run | not run on this model: engine 'kane'" in text
+    assert "supports the front-contact models disc" in text
 
 
 def test_quick_runs_exudyn_on_one_benchmark_manoeuvre_and_says_so(report):
