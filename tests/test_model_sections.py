@@ -149,3 +149,40 @@ def test_lift_off_is_the_first_unloaded_sample_after_the_start():
          "normal_force_front": np.r_[np.full(7, 5.0), np.zeros(4)]}
     assert lift_off_time(_traj(t, 0 * t, d)) == pytest.approx(0.07)
     assert lift_off_time(_traj(t, 0 * t)) is None                 # no forces recorded
+
+
+BOOM = '''
+from engines.base import Engine
+
+
+class Boom(Engine):
+    """An engine whose forward runs raise (a third party's solver that diverges)."""
+
+    name = "boom"
+    capabilities = frozenset({"simulate"})
+
+    def simulate(self, scenario, **options):
+        raise RuntimeError("solver diverged at t = 0.01 s")
+'''
+
+
+def test_an_engine_run_that_raises_is_its_failure_and_the_rest_is_written(tmp_path, capsys):
+    """Asked to run and did not: the engine's failure, named in the verdict and in summary.json
+    (passed false, exit 1), while the reference's results are all there (planted: dropping the
+    'engine run' row gives passed true and exit 0)."""
+    import json
+    spec = tmp_path / "boom.py"
+    spec.write_text(BOOM)
+    out = tmp_path / "r"
+    code = main(["run", "--quick", "--engines", f"reference,{spec}:Boom", "--scenarios",
+                 "check-forward", "--sections", "terms", "--figures", "none", "--jobs", "1",
+                 "--out", str(out)])
+    capsys.readouterr()
+    s = json.loads((out / "summary.json").read_text())
+    assert code == 1 and s["passed"] is False
+    bad = [c for c in s["comparisons"] if c["passed"] is False]
+    assert [(c["quantity"], c["engines"]) for c in bad] == [("engine run", ["Boom"])]
+    assert "solver diverged" in bad[0]["localized_to"]
+    assert {r["engine"]: r["status"] for r in s["engine_runs"]} == {"reference": "completed",
+                                                                    "Boom": "failed"}
+    assert "solver diverged" in (out / "report.md").read_text().split("## Summary")[0]

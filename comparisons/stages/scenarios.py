@@ -119,6 +119,12 @@ def compare_scenarios(names, setups: dict, runs: dict, horizons: dict, cases: di
         ref = runs[("reference", name)]
         here = {lab: runs[(lab, name)] for lab in labels
                 if (lab, name) in runs and runs[(lab, name)].status != "not run"}
+        for lab, r in here.items():   # asked for and not made: that engine's failure, counted
+            if lab != "reference" and r.status == "failed":
+                comps.append({"quantity": "engine run", "scenario": name, "model": model.name,
+                              "engines": [lab], "max_error": None, "tolerance": None,
+                              "passed": False, "localized_to": r.message[:300],
+                              "note": f"{lab} did not complete the run it was asked for"})
         if "mass_matrix" in sc.compared and ref.t.size:
             step = max(1, len(ref.t) // M_STATES)
             engines = {}
