@@ -56,7 +56,7 @@ def imported(tmp_path_factory):
 
 
 def test_three_of_the_ten_break_the_triangle_inequality(imported):
-    """The issue's count: Browser, Browserins and one more ship with a violation of 1-3 %."""
+    """The issue's count: three ship with a violation of 1-3 % (Browser, Yellow, Yellowrev)."""
     assert sum(broken for _, broken, _, _ in imported.values()) == 3
 
 
