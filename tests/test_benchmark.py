@@ -35,8 +35,9 @@ import pandas as pd
 import pytest
 
 from comparisons.cli import UsageError
-from comparisons.judgments.published import (MEIJAARD_CAPSIZE_SPEED, MEIJAARD_TABLE2, MEIJAARD_WEAVE_SPEED,
-                                   table2_eigenvalues)
+from comparisons.judgments.published import (MEIJAARD_CAPSIZE_SPEED, MEIJAARD_MATRICES,
+                                             MEIJAARD_TABLE2, MEIJAARD_WEAVE_SPEED,
+                                             table2_eigenvalues)
 from comparisons.cli.eigenvalues import add_eigenvalues_parser, parse_speeds, run_eigenvalues
 from comparisons.judgments.eigenvalues import eigenvalue_curves, eigenvalue_table
 from comparisons.report.figures import save_figure
@@ -55,15 +56,10 @@ XH, ZH, MH = "0.9", "-0.7", "4"
 IH = [["0.05892", "0", "-0.00756"], ["0", "0.06", "0"], ["-0.00756", "0", "0.00708"]]
 RF, MF, IFXX, IFYY = "0.35", "3", "0.1405", "0.28"
 
-# -- Table 2 (typed once, from the paper, in comparisons/published.py) -------------------------
+# -- Table 2 and the printed matrices (typed once, from the paper, in comparisons/published.py)
 TABLE2 = MEIJAARD_TABLE2
 WEAVE_SPEED, CAPSIZE_SPEED = MEIJAARD_WEAVE_SPEED, MEIJAARD_CAPSIZE_SPEED
-PUBLISHED = {
-    "M": [[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]],
-    "C1": [[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]],
-    "K0": [[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]],
-    "K2": [[0.0, 76.59734589573222], [0.0, 2.65431523794604]],
-}
+PUBLISHED = MEIJAARD_MATRICES
 TOL_EIG, TOL_SPEED, TOL_MATRIX = 1e-10, 1e-9, 1e-13
 
 

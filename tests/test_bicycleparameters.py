@@ -1,17 +1,16 @@
 """BicycleParameters' measured bicycles (issue 13's checks on real data).
 
 The ten ``<Name>Benchmark.txt`` sets ship inside the ``bicycleparameters`` package on PyPI
-(``bicycleparameters/app-data/bicycles/<Name>/Parameters/``; BSD-2-Clause, the BicycleParameters
-authors). The package is a test dependency (pyproject's ``test`` extra) and the files are read
-from where pip installed them: nothing is copied into this repository, and the package's code is
-not imported (only its location is looked up).
+(``tests/shipped_sets.py`` finds and parses them where pip installed them); the package's code
+is not imported here (tests/test_linear_closed_form.py checks the closed form against it).
 
 Expected values are independent of the code under test:
 
-* Table 1 values parsed here with a regular expression of the file's ``name = value+/-u`` lines;
-* M, C1, K0, K2 from the benchmark's closed form (``tests/meijaard_closed_form.py``, the paper's
-  appendix), eigenvalues from numpy on its 4x4 state matrix;
-* which sets break the triangle inequality: the principal moments computed here with numpy.
+* Table 1 values parsed with a regular expression of the file's ``name = value+/-u`` lines;
+* M, C1, K0, K2 from the benchmark's closed form (``comparisons/judgments/meijaard.py``, the
+  paper's appendix; itself checked against BicycleParameters' own implementation in
+  tests/test_linear_closed_form.py), eigenvalues from numpy on its 4x4 state matrix;
+* which sets break the triangle inequality: the principal moments computed with numpy.
 
 Tolerances are the issue's (and tests/test_import.py's, where they are argued): linear matrices
 1e-10 relative to each matrix's largest entry, eigenvalues at 0..10 m/s 1e-10 relative to
@@ -20,53 +19,20 @@ max(1, |lambda|); the round trip benchmark -> TOML -> benchmark is exact (==).
 
 from __future__ import annotations
 
-import importlib.util
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from meijaard_closed_form import closed_form, closed_form_eigenvalues, max_matched_error
+from comparisons.judgments.meijaard import (MATRICES, closed_form, closed_form_eigenvalues,
+                                           max_matched_error)
 from reference_model import load_model, load_parameters
-from reference_model.benchmark import BENCHMARK_NAMES, to_benchmark
+from reference_model.benchmark import to_benchmark
 from reference_model.benchmark_files import read_benchmark_file, write_import
 from reference_model.linearize import eigenvalues, linearize
 from reference_model.params import TriangleInequalityError
+from shipped_sets import SETS, breaks_triangle, shipped, table1
 
-SETS = ("Benchmark", "Browser", "Browserins", "Crescendo", "Fisher", "Pista", "Rigid", "Silver",
-        "Yellow", "Yellowrev")
 TOL_MATRIX, TOL_EIG = 1e-10, 1e-10
 SPEEDS = np.arange(0.0, 11.0)
-_LINE = re.compile(r"^\s*(\w+)\s*=\s*([-+0-9.eE]+)\s*(?:\+/-\s*[-+0-9.eE]+)?\s*$")
-
-
-def _shipped(name: str) -> Path:
-    spec = importlib.util.find_spec("bicycleparameters")
-    assert spec is not None and spec.submodule_search_locations, (
-        "the test dependency bicycleparameters is not installed: pip install -e '.[test]'")
-    root = Path(next(iter(spec.submodule_search_locations)))
-    return root / "app-data" / "bicycles" / name / "Parameters" / f"{name}Benchmark.txt"
-
-
-def _table1(path: Path) -> dict[str, float]:
-    """Table 1's 26 values of a BicycleParameters file, parsed independently of the project."""
-    values = {}
-    for line in path.read_text(encoding="utf-8").splitlines():
-        m = _LINE.match(line)
-        assert m, f"{path.name}: unexpected line {line!r}"
-        values[m.group(1)] = float(m.group(2))
-    return {k: values[k] for k in BENCHMARK_NAMES}
-
-
-def _breaks_triangle(b: dict[str, float]) -> bool:
-    tensors = ((b["IRxx"], b["IRyy"], b["IRxx"], 0.0), (b["IBxx"], b["IByy"], b["IBzz"], b["IBxz"]),
-               (b["IHxx"], b["IHyy"], b["IHzz"], b["IHxz"]), (b["IFxx"], b["IFyy"], b["IFxx"], 0.0))
-    for xx, yy, zz, xz in tensors:
-        m = np.sort(np.linalg.eigvalsh(np.array([[xx, 0, xz], [0, yy, 0], [xz, 0, zz]])))
-        if m[0] + m[1] < m[2]:
-            return True
-    return False
 
 
 @pytest.fixture(scope="module")
@@ -75,9 +41,9 @@ def imported(tmp_path_factory):
     out = tmp_path_factory.mktemp("bicycleparameters")
     result = {}
     for name in SETS:
-        path = _shipped(name)
-        b = _table1(path)
-        broken = _breaks_triangle(b)
+        path = shipped(name)
+        b = table1(path)
+        broken = breaks_triangle(b)
         if broken:
             with pytest.raises(TriangleInequalityError):
                 write_import(path, out / f"{name}-strict.toml")
@@ -90,7 +56,7 @@ def imported(tmp_path_factory):
 
 
 def test_three_of_the_ten_break_the_triangle_inequality(imported):
-    """The issue's count: Browser, Browserins and one more ship with a violation of 1-3 %."""
+    """The issue's count: three ship with a violation of 1-3 % (Browser, Yellow, Yellowrev)."""
     assert sum(broken for _, broken, _, _ in imported.values()) == 3
 
 
@@ -100,10 +66,11 @@ def test_linearization_matches_the_closed_form(imported, name):
     assert model.name == f"{name}Benchmark" and model.contact == "disc"
     expected = closed_form(b)
     lin = linearize(model, 0.0)
-    for key, mat in expected.items():
+    for key in MATRICES:
+        mat = getattr(expected, key)
         err = np.max(np.abs(getattr(lin, key) - mat)) / np.max(np.abs(mat))
         assert err < TOL_MATRIX, f"{name} {key}: relative error {err:.2e}"
-    worst = max(max_matched_error(closed_form_eigenvalues(expected, b["g"], v),
+    worst = max(max_matched_error(closed_form_eigenvalues(expected, v),
                                   eigenvalues(model, v)) for v in SPEEDS)
     assert worst < TOL_EIG, f"{name}: eigenvalues 0..10 m/s off by {worst:.2e}"
 
@@ -115,10 +82,10 @@ def test_round_trip_is_exact(imported, name):
 
 
 def test_the_extras_of_rigid_and_silver_are_said_not_dropped(imported):
-    rigid = read_benchmark_file(_shipped("Rigid"))
+    rigid = read_benchmark_file(shipped("Rigid"))
     assert any("handlebar (G)" in n for n in rigid.notes)
     assert any("fork (S)" in n for n in rigid.notes)
     assert "mH used as given" in imported["Rigid"][2].read_text(encoding="utf-8")
-    silver = read_benchmark_file(_shipped("Silver"))
+    silver = read_benchmark_file(shipped("Silver"))
     assert sorted(n.split(" =")[0] for n in silver.notes) == ["IFzz", "IRzz", "yB", "yH"]
     assert "IRzz = 0.078" in imported["Silver"][2].read_text(encoding="utf-8")

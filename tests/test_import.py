@@ -3,9 +3,11 @@
 
 Expected values are independent of the code under test:
 
-* the linear matrices M, C1, K0, K2 from the **closed form of the paper's appendix** (written
-  again below from the paper, in the benchmark's own axes, without the model's
-  parametrization), first checked to reproduce the paper's printed matrices for Table 1;
+* the linear matrices M, C1, K0, K2 from the **closed form of the paper's appendix**
+  (``comparisons/judgments/meijaard.py``, written from the paper in the benchmark's own axes,
+  without the model's parametrization), checked here to reproduce the paper's printed
+  matrices for Table 1 and in tests/test_linear_closed_form.py against BicycleParameters'
+  implementation on its ten sets;
 * eigenvalues of those matrices (numpy on the 4x4 state matrix), and Table 2 for Table 1;
 * the test sets' own values (``tests/benchmark_sets.py`` makes them: Table 1 in
   BicycleParameters' format, three perturbations of 10-20 % per parameter, one set that breaks
@@ -40,8 +42,9 @@ import numpy as np
 import pytest
 
 from benchmark_sets import DATA, NAMES, TABLE1 as TABLE1_TEXT, sets
-from meijaard_closed_form import closed_form, closed_form_eigenvalues, max_matched_error
-from comparisons.judgments.published import table2_eigenvalues
+from comparisons.judgments.meijaard import (MATRICES, closed_form, closed_form_eigenvalues,
+                                           max_matched_error)
+from comparisons.judgments.published import MEIJAARD_MATRICES, table2_eigenvalues
 from reference_model import ParameterError, Parameters, load_model, load_parameters
 from reference_model.benchmark import (BENCHMARK_NAMES, TABLE1, Table1, reference_parameters,
                                        to_benchmark, toml_text)
@@ -53,12 +56,7 @@ from reference_model.params import THESIS_FILE, TriangleInequalityError
 
 SET_FILES = ("Table1Benchmark.txt", "Perturbed1Benchmark.txt", "Perturbed2Benchmark.txt",
              "Perturbed3Benchmark.txt")
-PUBLISHED = {   # Meijaard et al. (2007), section 4 (the benchmark's printed matrices)
-    "M": [[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]],
-    "C1": [[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]],
-    "K0": [[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]],
-    "K2": [[0.0, 76.59734589573222], [0.0, 2.65431523794604]],
-}
+PUBLISHED = MEIJAARD_MATRICES
 TOL_PUBLISHED, TOL_MATRIX, TOL_EIG, TOL_REVERSE = 1e-13, 1e-10, 1e-10, 1e-14
 SPEEDS = np.arange(0.0, 11.0)
 
@@ -96,9 +94,10 @@ def test_committed_sets_are_what_their_generator_says():
 def test_closed_form_reproduces_the_published_matrices_and_table2():
     mats = closed_form(TABLE1.as_dict())
     for key, published in PUBLISHED.items():
-        np.testing.assert_allclose(mats[key], published, rtol=0, atol=TOL_PUBLISHED, err_msg=key)
+        np.testing.assert_allclose(getattr(mats, key), published, rtol=0, atol=TOL_PUBLISHED,
+                                   err_msg=key)
     for v in range(11):
-        got = closed_form_eigenvalues(mats, 9.81, float(v))
+        got = closed_form_eigenvalues(mats, float(v))
         assert max_matched_error(table2_eigenvalues(v), got) < TOL_EIG, v
 
 
@@ -109,12 +108,13 @@ def test_linearization_of_each_imported_set_matches_the_closed_form(imported, na
     assert model.name == Path(name).stem and model.contact == "disc"
     expected = closed_form(b)
     lin = linearize(model, 0.0)
-    for key, mat in expected.items():
+    for key in MATRICES:
+        mat = getattr(expected, key)
         got = getattr(lin, key)
         scale = np.max(np.abs(mat))
         err = np.max(np.abs(got - mat)) / scale
         assert err < TOL_MATRIX, f"{key}: relative error {err:.2e}"
-    worst = max(max_matched_error(closed_form_eigenvalues(expected, b["g"], v),
+    worst = max(max_matched_error(closed_form_eigenvalues(expected, v),
                                    eigenvalues(model, v)) for v in SPEEDS)
     assert worst < TOL_EIG, f"eigenvalues 0..10 m/s: {worst:.2e}"
 

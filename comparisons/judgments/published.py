@@ -3,7 +3,9 @@
 Meijaard, Papadopoulos, Ruina, Schwab (2007), "Linearized dynamics equations for the balance
 and steer of a bicycle: a benchmark and review", Proc. R. Soc. A 463, Table 2: the
 eigenvalues of the benchmark bicycle (weave pair re +- im i, capsize, castor; at v = 0 the
-four real roots) and its weave and capsize speeds, typed from the paper.
+four real roots) and its weave and capsize speeds, and the numerical M, C1, K0, K2 it prints
+for Table 1's bicycle (section 4; g = 9.81 m/s^2, [phi, delta], 14 decimals), typed from the
+paper.
 """
 
 from __future__ import annotations
@@ -26,6 +28,13 @@ MEIJAARD_TABLE2 = {
 }
 MEIJAARD_WEAVE_SPEED = 4.29238253634111     # m/s
 MEIJAARD_CAPSIZE_SPEED = 6.02426201538837   # m/s
+# M q'' + v C1 q' + (g K0 + v^2 K2) q = [T_phi, T_delta]; kg m^2, kg m^2/s per m/s, kg m, kg
+MEIJAARD_MATRICES = {
+    "M": ((80.81722, 2.31941332208709), (2.31941332208709, 0.29784188199686)),
+    "C1": ((0.0, 33.86641391492494), (-0.85035641456978, 1.68540397397560)),
+    "K0": ((-80.95, -2.59951685249872), (-2.59951685249872, -0.80329488458618)),
+    "K2": ((0.0, 76.59734589573222), (0.0, 2.65431523794604)),
+}
 
 
 def table2_eigenvalues(v: int) -> np.ndarray:

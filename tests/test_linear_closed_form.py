@@ -1,0 +1,205 @@
+"""The benchmark's closed form (comparisons/judgments/meijaard.py) against a third-party
+implementation, and the linearization check built on it (`bicycle-xval run --model`'s
+"Linearization of <model> against the benchmark's closed form").
+
+Expected values are independent of the code under test:
+
+* BicycleParameters' own ``bicycleparameters.bicycle.benchmark_par_to_canonical`` (Moore's
+  implementation of the same appendix, imported once per module: ~2 s) on its ten shipped sets,
+  nominal values parsed by tests/shipped_sets.py;
+* the critical speeds computed here from BicycleParameters' matrices: numpy eigenvalues of the
+  4x4 state matrix, brentq on the real part of the complex pair (weave) and on the larger real
+  eigenvalue (capsize), bracketed on a 0.05 m/s grid;
+* Meijaard et al.'s printed matrices of the benchmark bicycle (comparisons/judgments/
+  published.py, typed from the paper).
+
+**Izz = Ixx of the wheels.** The paper's wheels have IRzz = IRxx, IFzz = IFxx; the closed form
+reads only IRxx, IFxx, and ``benchmark_par_to_canonical`` overwrites IRzz, IFzz with them.
+Only Silver's file gives IRzz and IFzz: the test checks they equal IRxx, IFxx, so nothing a file
+says is dropped by that assumption.
+
+Tolerances (each a claim):
+
+* closed form vs BicycleParameters, 1e-12 relative to each matrix's largest entry: the same
+  formulas in double, so they differ by rounding only (a reassociated sum of ~20 terms: ~1e-15);
+  measured 0 (identical order of operations). A Table 1 value read wrongly or a term mistyped
+  moves entries by far more (changing trail by 1e-9 m moves C1 by ~1e-8 relative).
+* the check's critical speeds vs the ones computed here, 1e-9 m/s: brentq to 1e-14 on both
+  sides on matrices equal to rounding; measured <= 2e-14.
+* the benchmark bicycle's linearization at 5 m/s vs the printed matrices, 1e-13 absolute for
+  M, C1, K0, K2 (14 printed decimals: rounding 5e-15, entries up to 81 carry a few ulps of
+  1.4e-14), 1e-14 relative to the largest entry for K = g K0 + v^2 K2 and C = v C1 (entries
+  up to 1.9e3, whose ulp is 2.3e-13; measured 4.8e-16). 5 m/s, so that v^2 != v.
+
+Cost: ~2 s importing BicycleParameters, ~0.6 s for the ten checks, ~3 s for the file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pickle
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import reference_model.linearize as linearize_module
+from comparisons.judgments.meijaard import MATRICES, closed_form
+from comparisons.judgments.published import MEIJAARD_MATRICES
+from comparisons.stages.linear_check import linear_check
+from reference_model import load_model
+from reference_model.linearize import Linearization, linearize
+from shipped_sets import SETS, file_values, import_shipped, shipped, table1
+
+TOL_CANONICAL, TOL_SPEED, TOL_PRINTED, TOL_K = 1e-12, 1e-9, 1e-13, 1e-14
+V = 5.0
+
+
+@pytest.fixture(scope="module")
+def canonical():
+    """BicycleParameters' M, C1, K0, K2 of each shipped set, by name (its code, imported once)."""
+    from bicycleparameters.bicycle import benchmark_par_to_canonical
+    out = {}
+    for name in SETS:
+        values = file_values(shipped(name))
+        for wheel in ("R", "F"):          # the paper's Izz = Ixx (module docstring)
+            if f"I{wheel}zz" in values:
+                assert values[f"I{wheel}zz"] == values[f"I{wheel}xx"], name
+        out[name] = dict(zip(MATRICES, (np.asarray(m, dtype=float)
+                                        for m in benchmark_par_to_canonical(dict(values)))))
+    return out
+
+
+@pytest.fixture(scope="module")
+def specs(tmp_path_factory):
+    """Each shipped set imported by the project's import path: the spec linear_check takes."""
+    out = tmp_path_factory.mktemp("linear-closed-form")
+    return {name: str(import_shipped(name, out)) for name in SETS}
+
+
+def _state(mats: dict, g: float, v: float) -> np.ndarray:
+    Minv = np.linalg.inv(mats["M"])
+    return np.block([[np.zeros((2, 2)), np.eye(2)],
+                     [-Minv @ (g * mats["K0"] + v * v * mats["K2"]), -v * Minv @ mats["C1"]]])
+
+
+def _weave(mats, g, v) -> float:
+    lam = np.linalg.eigvals(_state(mats, g, v))
+    pair = lam[np.abs(lam.imag) > 0]
+    return float(pair.real.max()) if pair.size else math.nan
+
+
+def _capsize(mats, g, v) -> float:
+    lam = np.linalg.eigvals(_state(mats, g, v))
+    real = lam[lam.imag == 0].real
+    return float(real.max()) if real.size else math.nan
+
+
+def _root(f, lo: float, hi: float, falling: bool) -> float | None:
+    grid = np.linspace(lo, hi, int(round((hi - lo) / 0.05)) + 1)
+    values = [f(v) for v in grid]
+    for a, b, fa, fb in zip(grid, grid[1:], values, values[1:]):
+        if (fa > 0 >= fb) if falling else (fa < 0 <= fb):
+            return brentq(f, a, b, xtol=1e-14, rtol=1e-15)
+    return None
+
+
+def _critical_from_canonical(mats: dict, g: float) -> tuple[float | None, float | None]:
+    """(weave, capsize) in 0..10 m/s: the weave pair's real part falls through zero, then the
+    capsize eigenvalue (the larger real one) rises through zero."""
+    weave = _root(lambda v: _weave(mats, g, v), 0.0, 10.0, falling=True)
+    capsize = _root(lambda v: _capsize(mats, g, v), 0.0 if weave is None else weave, 10.0,
+                    falling=False)
+    return weave, capsize
+
+
+# --------------------------------------------------------------------------------------------
+# the closed form against BicycleParameters
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", SETS)
+def test_closed_form_equals_bicycleparameters_canonical_matrices(canonical, name):
+    cf = closed_form(table1(shipped(name)))
+    for key in MATRICES:
+        expected = canonical[name][key]
+        err = np.max(np.abs(getattr(cf, key) - expected)) / np.max(np.abs(expected))
+        assert err <= TOL_CANONICAL, f"{name} {key}: relative difference {err:.1e}"
+
+
+# --------------------------------------------------------------------------------------------
+# the stage on the ten sets
+# --------------------------------------------------------------------------------------------
+
+
+def _rows(sec) -> dict:
+    return {c["quantity"].removeprefix("linearization vs closed form: "): c for c in sec.comparisons}
+
+
+@pytest.mark.parametrize("name", SETS)
+def test_linear_check_passes_and_its_speeds_are_bicycleparameters(canonical, specs, name):
+    sec = linear_check(specs[name])
+    assert sec.title == f"Linearization of {name}Benchmark against the benchmark's closed form"
+    rows = _rows(sec)
+    assert set(rows) == {*MATRICES, "weave speed", "capsize speed"}
+    assert all(r["passed"] is True for r in rows.values()), [r for r in rows.values()
+                                                            if not r["passed"]]
+    weave, capsize = _critical_from_canonical(canonical[name], table1(shipped(name))["g"])
+    for mode, expected in (("weave", weave), ("capsize", capsize)):
+        row = rows[f"{mode} speed"]
+        for side in ("closed_form", "linearization"):
+            got = row[side]
+            if expected is None:
+                assert got is None, f"{name} {mode} ({side}): {got}, none expected"
+            else:
+                assert got is not None and abs(got - expected) <= TOL_SPEED, (
+                    f"{name} {mode} ({side}): {got!r} vs {expected!r}")
+    assert weave is not None        # every set weaves in 0..10 m/s
+    pickle.dumps(sec)               # stages run in worker processes
+
+
+def _planted(monkeypatch, change):
+    """Replace the linearization's speed-independent matrices (model signs) by ``change`` of
+    them: what linearize, eigenvalues and the critical speeds all read."""
+    original = linearize_module._expansion
+    monkeypatch.setattr(linearize_module, "_expansion",
+                        lambda params: dataclasses.replace(original(params),
+                                                           **change(original(params))))
+
+
+@pytest.mark.parametrize("bug, failing", [
+    (lambda e: {"K2": -e.K2}, {"K2", "weave speed", "capsize speed"}),
+    # the velocity matrices read off a linearization at 2 m/s as if at 1 m/s
+    (lambda e: {"C1": 2.0 * e.C1, "K2": 4.0 * e.K2}, {"C1", "K2", "weave speed", "capsize speed"}),
+], ids=["K2-sign", "v-scaling"])
+def test_a_planted_linearization_bug_fails_the_check(monkeypatch, specs, bug, failing):
+    _planted(monkeypatch, bug)
+    rows = _rows(linear_check(specs["Benchmark"]))
+    assert {q for q, r in rows.items() if r["passed"] is False} == failing
+
+
+def test_thesis_contact_is_not_applicable_and_drag_is_removed_and_said():
+    rows = linear_check("thesis").comparisons
+    assert len(rows) == 1 and rows[0]["passed"] is None
+    assert rows[0]["note"].startswith("not applicable: no benchmark counterpart: model.contact")
+    sec = linear_check("thesis-disc")                      # cv = 0.8 kg/m
+    assert all(c["passed"] is True for c in sec.comparisons)
+    assert "checked with cv = 0" in sec.blocks[0].text
+
+
+# --------------------------------------------------------------------------------------------
+# Linearization at 5 m/s against the paper's printed matrices
+# --------------------------------------------------------------------------------------------
+
+
+def test_linearization_at_5_m_s_is_the_printed_benchmark():
+    lin = linearize(load_model("benchmark"), V)
+    printed = {k: np.array(v) for k, v in MEIJAARD_MATRICES.items()}
+    for key in MATRICES:
+        np.testing.assert_allclose(getattr(lin, key), printed[key], rtol=0, atol=TOL_PRINTED,
+                                   err_msg=key)
+    K = 9.81 * printed["K0"] + V**2 * printed["K2"]
+    C = V * printed["C1"]
+    for got, expected in ((lin.K, K), (lin.C, C)):
+        assert np.max(np.abs(got - expected)) <= TOL_K * np.max(np.abs(expected))
