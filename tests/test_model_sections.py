@@ -53,8 +53,8 @@ def _breaks_triangle(model) -> bool:
 
 def test_a_model_run_asks_for_every_section(triangle):
     """The stages of ``run --quick --model`` on the default engines: each engine term by term,
-    fault injection on every engine, Exudyn's convergence and energy, the soft-contact study
-    and the stability picture, all on the model (planted: the model run returning before the
+    fault injection on every engine, Exudyn's convergence and energy, the soft-contact study,
+    the stability picture and the linearization against the closed form, all on the model (planted: the model run returning before the
     engine sections, as it used to, fails this)."""
     from comparisons.stages.cases import build_cases, model_spec
     from comparisons.stages.pipeline import Options, _tasks, select
@@ -69,7 +69,8 @@ def test_a_model_run_asks_for_every_section(triangle):
     for engine in ("pinocchio", "exudyn", "kane", "mujoco"):
         assert ("model-terms", engine, m.spec) in keys, engine
         assert ("faults", engine, m.spec) in keys, engine
-    for kind in ("exudyn-convergence", "energy", "mujoco-contact", "stability-curves"):
+    for kind in ("exudyn-convergence", "energy", "mujoco-contact", "stability-curves",
+                 "linear-check"):
         assert (kind, m.spec) in keys, kind
 
 

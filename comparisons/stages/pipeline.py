@@ -260,8 +260,10 @@ def _model_section_tasks(opts: Options, m) -> list[Task]:
     drift, the soft-contact study (disc contact), each at ``--quick``'s smaller size when asked.
     An engine that cannot represent the bicycle says so in its section ('not run on this
     model: <reason>')."""
-    from . import engines, faults, mujoco_contact
-    quick, want, tasks = opts.quick, set(opts.sections), []
+    from . import engines, faults, linear_check, mujoco_contact
+    quick, want = opts.quick, set(opts.sections)
+    tasks = [Task(("linear-check", m.spec), linear_check.linear_check, (m.spec,), 0.1,
+                  f"{m.name}: linearization vs the closed form")]
     if "terms" in want:
         for spec in opts.engines:
             if spec != "reference":
@@ -412,6 +414,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
             sections.append(benchmark.benchmark_section(opts.quick, [v for v, _ in bench_runs],
                                                         terms, conv))
     for m in opts.models:
+        add(("linear-check", m.spec), f"{m.name}: linearization against the closed form")
         for spec in opts.engines:
             add(("model-terms", spec, m.spec), f"{m.name}: reference vs {spec}, term by term")
         add(("exudyn-convergence", m.spec), f"{m.name}: Exudyn convergence")
