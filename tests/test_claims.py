@@ -1,4 +1,4 @@
-"""The claims judges (comparisons/claims.py) on hand-made runs: every verdict of every judge.
+"""The claims judges (comparisons/judgments/claims.py) on hand-made runs: every verdict of every judge.
 
 No engine runs here: each `Run` is built from synthetic arrays chosen to sit clearly on one
 side of a judge's threshold (the thresholds are the plain reading of the thesis's words, see

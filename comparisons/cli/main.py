@@ -225,10 +225,26 @@ def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
+class _Version(argparse.Action):
+    """``--version``: asked of git only when given (not on every start, as argparse's own)."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ..provenance import guide_path, package_provenance, version_line
+        guide = guide_path()
+        print(version_line(package_provenance()))
+        print(f"reading guide: {guide or 'not found (docs/report.md)'}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     from reference_model.solvers import CONSTRAINT_HANDLING, DEFAULT_FALL_LIMIT
 
     p = _Parser(prog="bicycle-xval", description="Cross-validation harness for the thesis bicycle.")
+    p.add_argument("--version", action=_Version, help="print the version (and the git commit of "
+                   "a checkout) and where the reading guide docs/report.md is, and exit")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
 

@@ -2,16 +2,90 @@
 thesis's claims, then the summary table, then every section's details.
 
 How to read each section and verdict: docs/report.md.
+
+Escaping: everything the harness measured or was told (evidence, messages, engine and model
+names, file paths, reasons, headings, table cells) is plain text, and reaches the markdown
+through :func:`inline` only, which escapes what CommonMark would read as markup (``kg*m^2 ...
+kg*m^2`` stays two asterisks, not italics). The writer's own formatting (the bold verdict,
+the code spans it means) is written as :class:`Markdown`, which :func:`inline` leaves alone;
+`stages.results.Text` paragraphs are markdown written by the stages, as their docstring says.
 """
 
 from __future__ import annotations
 
+import re
+import string
+
 from ..stages.results import Figure, Heading, Section, Table, Text, num
+
+__all__ = ["Markdown", "cell", "code", "escape", "inline", "md", "render", "table"]
+
+
+class Markdown(str):
+    """Text that is markdown already (the writer's own formatting): not escaped again."""
+
+
+# What CommonMark (with GFM tables and strikethrough, as html.py parses it) could read as
+# markup in a line of text: backslash, code, emphasis, table and strikethrough delimiters
+# anywhere; an underscore unless it sits inside a word (``psi_dot``: intraword underscores
+# never open or close emphasis, and stay readable); ``<`` before what could start an autolink;
+# an entity (``&lt;``); a ``]`` that could close a link or image (``](``, ``][``, ``]:``, the
+# only ways a link forms without a definition, and the report defines none). Where the text
+# opens a block (a list item's text; not a table cell, whose "-" is a value), also what would
+# start a heading, quote, list or thematic break (``# ``, ``>``, ``- ``, ``---``, ``+ ``,
+# ``1. ``; not ``0.1.0``).
+_SPECIAL = re.compile(r"[\\`*|~]|(?<![^\W_])_|_(?![^\W_])|<(?=[A-Za-z/!?])|&(?=#?\w+;)"
+                      r"|\](?=[(\[:])")
+_BLOCK_START = re.compile(r"^(?:#(?=#{0,5}(?:\s|$))|>|-(?=[-\s]|$)|\+(?=\s|$)"
+                          r"|\d{1,9}(?=[.)](?:\s|$)))")
+#: what may precede a field in md()'s template for the field to open a block
+_LIST_MARKER = re.compile(r"\s*(?:[-+*]|\d{1,9}[.)])?\s*")
+
+
+def escape(text: str, opens_block: bool = False) -> str:
+    """``text`` with a backslash before every character CommonMark would read as markup (a
+    block-opening ``1.`` as ``1\\.``): it renders as the same characters."""
+    text = _SPECIAL.sub(lambda m: "\\" + m[0], text)
+    if opens_block:
+        text = _BLOCK_START.sub(lambda m: m[0] + "\\" if m[0][0].isdigit() else "\\" + m[0], text)
+    return text
+
+
+def inline(x, opens_block: bool = False) -> Markdown:
+    """Harness text as one line of markdown: whitespace collapsed, then escaped; a
+    :class:`Markdown` value is the writer's own and passes as it is."""
+    if isinstance(x, Markdown):
+        return x
+    return Markdown(escape(" ".join(str(x).split()), opens_block))
 
 
 def cell(text) -> str:
-    """Text safe inside a markdown table cell (pipes escaped, one line)."""
-    return " ".join(str(text).split()).replace("|", "\\|")
+    """Text safe inside a markdown table cell (one line, escaped: a pipe is ``\\|``)."""
+    return inline(text)
+
+
+def code(text) -> Markdown:
+    """``text`` as a code span (shown exactly as it is: no escaping inside one)."""
+    text = " ".join(str(text).split())
+    fence = "`" * (max((len(r) for r in re.findall("`+", text)), default=0) + 1)
+    pad = " " if text.startswith("`") or text.endswith("`") else ""
+    return Markdown(f"{fence}{pad}{text}{pad}{fence}")
+
+
+def md(template: str, *args) -> Markdown:
+    """``template`` (the writer's markdown, ``{}`` fields in order) with every field filled by
+    :func:`inline` text; numbers pass through, so a field may carry a format (``{:.3f}``). A
+    field with only a list marker before it (``- {}``) opens a block, and is escaped so."""
+    out, values = [], iter(args)
+    for literal, field, spec, conversion in string.Formatter().parse(template):
+        out.append(literal)
+        if field is None:
+            continue
+        x = next(values)
+        if not (isinstance(x, (int, float)) and not isinstance(x, bool)):
+            x = inline(x, opens_block=len(out) == 1 and _LIST_MARKER.fullmatch(literal) is not None)
+        out.append(format(x, spec or ""))
+    return Markdown("".join(out))
 
 
 def table(header, rows, note: str = "") -> list[str]:
@@ -24,16 +98,16 @@ def table(header, rows, note: str = "") -> list[str]:
 
 
 def _blocks(section: Section, level: int) -> list[str]:
-    out = [f"{'#' * level} {section.title}", ""]
+    out = [f"{'#' * level} {inline(section.title)}", ""]
     for b in section.blocks:
         if isinstance(b, Text):
             out += [b.text, ""]
         elif isinstance(b, Heading):
-            out += [f"{'#' * (level + 1)} {b.text}", ""]
+            out += [f"{'#' * (level + 1)} {inline(b.text)}", ""]
         elif isinstance(b, Table):
             out += table(b.header, b.rows, b.note)
         elif isinstance(b, Figure):
-            out += [f"![{b.caption or b.name[:-4]}](figures/{b.name})", ""]
+            out += [f"![{inline(b.caption or b.name[:-4])}](figures/{b.name})", ""]
     return out
 
 
@@ -64,9 +138,9 @@ def _verdict(summary: dict) -> list[str]:
     not_run = sum(f['verdict'] == 'not run' for f in faults)
     return [
         f"**{head}**", "",
-        *[f"- **Dropped**: engine `{d['engine']}`: {d['reason']}" for d in dropped],
-        f"- Engines: {', '.join(summary['engines'])}"
-        f"{' (quick subset of scenarios and states)' if summary.get('quick') else ''}.",
+        *[md("- **Dropped**: engine {}: {}", code(d["engine"]), d["reason"]) for d in dropped],
+        md("- Engines: {}", ", ".join(summary["engines"]))
+        + f"{' (quick subset of scenarios and states)' if summary.get('quick') else ''}.",
         *([f"- Figures: {_FIGURES_SAID[summary['figures']]}"]
           if summary.get("figures", "all") != "all" else []),
         f"- {len(comps)} comparisons, {n_judged} judged against a tolerance, {n_fail} failed; "
@@ -78,11 +152,32 @@ def _verdict(summary: dict) -> list[str]:
             "limitation)" if not_run else "") + "."
          if "engine_sections" not in summary else
          f"- Fault injection and the engine sections: {summary['engine_sections']}."),
-        "- The thesis's claims: " + (", ".join(f"{v} {k}" for k, v in sorted(verdicts.items()))
-                                     or "none judged") + ".",
+        md("- The thesis's claims: {}.", ", ".join(f"{v} {k}" for k, v in sorted(verdicts.items()))
+           or "none judged"),
+        *_bicycles(summary),
         *_models(summary),
-        "", "How to read this report: `docs/report.md` in the repository. Tolerances and their "
-        "reasons: `comparisons/judgments/tolerances.toml`. Machine-readable: `summary.json`.", ""]
+        "", GUIDE_LINE, ""]
+
+
+#: where the reading guide is, for a reader with the repository and for one with the wheel
+#: (pyproject.toml ships docs/ as comparisons/docs/; `bicycle-xval --version` prints its path)
+GUIDE_LINE = ("How to read this report: `docs/report.md`, in the repository and in the "
+              "installed package (`bicycle-xval --version` prints where). Tolerances and their "
+              "reasons: `comparisons/judgments/tolerances.toml`. Machine-readable: "
+              "`summary.json`.")
+
+
+def _bicycles(summary: dict) -> list[str]:
+    """The verdict block's lines on the built-in bicycles compared (a --model run names its
+    models instead, below): name, parameter file, contact, how many comparisons."""
+    if "models" in summary:
+        return []
+    out = []
+    for b in summary.get("provenance", {}).get("bicycles", []):
+        variants = f", some with {', '.join(b['variants'])}" if b["variants"] else ""
+        out.append(md("  - {}: {}, {} contact ({} comparisons{})", b["name"], code(b["source"]),
+                      b["contact"], b["comparisons"], variants))
+    return ["- Bicycles compared:", *out] if out else []
 
 
 def _models(summary: dict) -> list[str]:
@@ -90,9 +185,9 @@ def _models(summary: dict) -> list[str]:
     thesis's own run): name, source, contact, and every model's warnings, said here."""
     out = []
     for m in summary.get("models", []):
-        out.append(f"- Model {m['name']}: {m['source']}, contact {m['contact']}"
+        out.append(md("- Model {}: {}, contact {}", m["name"], m["source"], m["contact"])
                    + (", **with warnings** (below)." if m["warnings"] else "."))
-        out += [f"  - **Warning** ({m['name']}): {w}" for w in m["warnings"]]
+        out += [md("  - **Warning** ({}): {}", m["name"], w) for w in m["warnings"]]
     if summary.get("not_run"):
         out.append(f"- Not run: {len(summary['not_run'])} scenario-model pair(s), each with its "
                    "reason in 'Models of this run'.")
@@ -112,12 +207,12 @@ def _failures(summary: dict, localization) -> list[str]:
                      [(c["quantity"], c["scenario"], " vs ".join(c["engines"]),
                        num(c["max_error"]), num(c["tolerance"]), c.get("localized_to", "-"))
                       for c in bad])
-    out += [f"- analytic check failed: {c['check']} ({c['evidence']})" for c in bad_checks]
-    out += [f"- fault {f['fault']} on {f['engine']}: {f['verdict']} ({f['evidence']})"
+    out += [md("- analytic check failed: {} ({})", c["check"], c["evidence"]) for c in bad_checks]
+    out += [md("- fault {} on {}: {} ({})", f["fault"], f["engine"], f["verdict"], f["evidence"])
             for f in bad_faults]
     for title, text in localization:
-        out += [f"### Where the engines disagree: {title}", ""]
-        out += [f"- {line.strip()}" for line in text.splitlines() if line.strip()] + [""]
+        out += [md("### Where the engines disagree: {}", title), ""]
+        out += [md("- {}", line) for line in text.splitlines() if line.strip()] + [""]
     return out
 
 
@@ -156,10 +251,11 @@ def _reference(summary: dict) -> list[str]:
     if summary["initial_corrections"]:
         out += ["Initial states: every engine starts from the same projected state (beta from "
                 "[rD]_z = 0, dependent rates from D dq = 0). Corrections applied:", ""]
-        out += [f"- {name}: {text}" for name, text in summary["initial_corrections"].items()] + [""]
+        out += [md("- {}: {}", name, text)
+                for name, text in summary["initial_corrections"].items()] + [""]
     for c in summary["checks"]:
-        out += [f"Analytic check: {c['check']}: {'holds' if c['passed'] else 'FAILS'} "
-                f"({c['evidence']}).", ""]
+        out += [md("Analytic check: {}: {} ({}).", c["check"], "holds" if c["passed"] else "FAILS",
+                   c["evidence"]), ""]
     return out
 
 
@@ -167,18 +263,29 @@ def _tail(summary: dict) -> list[str]:
     out = []
     if summary["expected_differences"]:
         out += ["## Expected differences (declared in the scenario registry)", ""]
-        out += [f"- {e['scenario']}, {e['quantity']}, {e['engines']}: expected '{e['expected']}' "
-                f"because {e['reason']}" for e in summary["expected_differences"]] + [""]
+        out += [md("- {}, {}, {}: expected '{}' because {}", e["scenario"], e["quantity"],
+                   e["engines"], e["expected"], e["reason"])
+                for e in summary["expected_differences"]] + [""]
     env = summary["environment"]
     out += ["## Environment", "",
-            f"Machine: {env['machine']['cpu']}, {env['machine']['cores']} cores, "
-            f"{env['machine']['platform']}.", "",
-            "Packages: " + ", ".join(f"{k} {v}" for k, v in env["packages"].items()) + ".", "",
+            *_code_line(summary.get("provenance")),
+            md("Machine: {}, {} cores, {}.", env["machine"]["cpu"], env["machine"]["cores"],
+               env["machine"]["platform"]), "",
+            md("Packages: {}.", ", ".join(f"{k} {v}" for k, v in env["packages"].items())), "",
             "Solver settings:", ""]
-    out += [f"- {k}: {v}" for k, v in env["solvers"].items()]
-    out += ["", "Steps: " + ", ".join(f"{k} = {v}" for k, v in env["steps"].items()) + ".", "",
+    out += [md("- {}: {}", k, v) for k, v in env["solvers"].items()]
+    out += ["", md("Steps: {}.", ", ".join(f"{k} = {v}" for k, v in env["steps"].items())), "",
             "Run times are in `timings.json` (kept apart so the report is identical run to run)."]
     return out
+
+
+def _code_line(p: dict | None) -> list[str]:
+    """The code that wrote the report: version and, in a git checkout, the commit."""
+    if not p:
+        return []
+    commit = "" if not p["commit"] else (
+        md(", commit {}", code(p["commit"][:12])) + (" (uncommitted changes)" if p["dirty"] else ""))
+    return [md("Code: bicycle-xval {}", p["version"] or "(not installed)") + commit + ".", ""]
 
 
 def render(result) -> str:

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .figures import _plt, png_bytes
+from .markdown import cell, inline
 from ..stages.files import write_bytes, write_text
 
 MAX_LISTED = 200      # disagreeing bicycles listed in report.md (all are in results.parquet)
@@ -99,12 +100,13 @@ def write_sweep_report(spec, result) -> dict:
     frame = pd.read_parquet(result.results)
     counts = summarize(frame)
     axes = _axes(spec, frame)
-    lines = [f"# Sweep {result.hash}: {spec.n_bicycles} bicycles around {spec.base_name}", ""]
+    lines = [f"# Sweep {result.hash}: {spec.n_bicycles} bicycles around "
+             f"{inline(spec.base_name)}", ""]
     how = (", ".join(g.text() for g in spec.grids) if spec.grids else
            f"{spec.sample} random bicycles within +-{spec.spread:g} % (seed {spec.seed}; "
            "inertias congruence-scaled, physical by construction)")
-    lines += [f"Bicycles: {how}. Contact {spec.contact}. Engines {', '.join(spec.engines)} "
-              f"against the reference; checks {', '.join(spec.checks)}; {spec.n_states} random "
+    lines += [f"Bicycles: {inline(how)}. Contact {spec.contact}. Engines "
+              f"{inline(', '.join(spec.engines))} against the reference; checks {', '.join(spec.checks)}; {spec.n_states} random "
               "states per bicycle for the terms.", "",
               f"**{counts['agree']} agree, {counts['disagree']} disagree, {counts['failed']} "
               f"failed, {counts['invalid']} invalid.** Every row: `results.parquet` (columns: "
@@ -137,14 +139,11 @@ def write_sweep_report(spec, result) -> dict:
             vals = " | ".join("" if not math.isfinite(float(r[c])) else f"{float(r[c]):.6g}"
                               for c in cols)
             loc = r["localization"] if "localization" in r else ""
-            lines.append(f"| {r['bicycle']} | {vals} | {r['status']} | "
-                         f"{_cell(r['failures'])} | {_cell(loc)} |")
+            lines.append(f"| {cell(r['bicycle'])} | {vals} | {cell(r['status'])} | "
+                         f"{cell(r['failures'] or '')} | {cell(loc or '')} |")
         if len(bad) > MAX_LISTED:
             lines += ["", f"... and {len(bad) - MAX_LISTED} more in results.parquet."]
         lines.append("")
     path = write_text(out / "report.md", "\n".join(lines))
     return {**counts, "report": path}
 
-
-def _cell(text) -> str:
-    return str(text or "").replace("|", "\\|").replace("\n", " ")

@@ -42,6 +42,7 @@ from typing import Callable
 
 from engines.runs import Run
 
+from .. import provenance
 from ..judgments.claims import judge_claims
 from ..judgments.summary import summary_table
 from .pool import Task, run_tasks
@@ -459,6 +460,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "initial_corrections": corrections,
         "expected_differences": _expected_differences(names, cases),
         "environment": environment(setups, opts.quick),
+        "provenance": provenance.record(comparisons, runs.values()),
         "quick": opts.quick,
         "figures": opts.figure_policy,
         "sections": list(opts.sections),
