@@ -11,18 +11,41 @@ file (a consistency check of adapters and engines: everything must agree) or fro
    ``D ddq + dD dq = 0``: each term is taken out of an engine through the Engine interface
    (`engine_terms`: e.g. ``Qv = -(M 0 - Qv - Qgrav) - Qgrav`` from inverse dynamics and gravity,
    or ``Qv = (F(dq) + F(-dq))/2 - F(0)`` from the generalized forces ``F``, since Qv is even in
-   dq, Qaero odd and ``S T`` linear in T) and checked against the reference's own term.
+   dq, Qaero odd and ``S T`` linear in T) and checked against the reference's own term. Where
+   an engine offers two ways (gravity() and generalized_forces), `localize` checks both ("Qgrav
+   in F", "Qv in F": a mistake in F alone shows there), and it checks the engine's forward
+   accelerations against the constrained solve of the engine's *own* terms ("ddq solve": a
+   wrong solve shows there, wrong terms do not).
 3. **Which cause, hence which body**: the discrepancy ``r = engine - model`` over all states and
    all compared terms (each entry divided by its tolerance's scale, so terms of different units
-   weigh alike; agreeing terms stay in the fit, where they rule causes out) is fitted by least
-   squares onto the effect of each candidate cause on the model's terms:
-   ``d(term)/d p_j`` for each of the 30 parameters (central differences; one-sided where the
-   parameter sits on a validity boundary, which happens only for inertias and masses, where the
-   terms are linear and one-sided differences are exact), the gyroscopic terms ``w x (I w)``,
-   and the other front-contact model. The explained fraction of the single cause j is
-   ``(s_j . r)^2 / (|s_j|^2 |r|^2)``; when no single cause explains at least
-   ``EXPLAINED`` of it, pairs are tried (e.g. two swapped inertias). The fitted coefficient is
-   the estimated parameter difference (engines' value minus the model's).
+   weigh alike; agreeing terms stay in the fit, where they rule causes out) is compared with the
+   effect ``s`` of each candidate cause on the model's terms (`candidate_causes`,
+   `comparisons.judgments.causes`):
+
+   * *continuous* causes, fitted by least squares: ``d(term)/d p_j`` for each of the 30
+     parameters (central differences; one-sided where the parameter sits on a validity
+     boundary, which happens only for inertias and masses, where the terms are linear and
+     one-sided differences are exact), each parameter in one term only (D and dD dq built with
+     different radii), the gyroscopic terms ``w x (I w)``, the other front-contact model, and
+     on a model built from the benchmark's Table 1 each of its 26 inputs through the conversion
+     (`reference_model.benchmark`). The share is ``(s . r)^2 / (|s|^2 |r|^2)`` and the fitted
+     coefficient the estimated difference (engines' value minus the model's);
+   * *discrete* mistakes, taken at full size: a term's sign flipped (``-2 T``) or the term
+     missing (``-T``), in every copy or in generalized_forces only; a rider torque with the
+     wrong sign, on the wrong body or two torques swapped; two coordinates swapped in a term's
+     arguments (``T(P q) - T(q)``); a Table 1 slip (trail's sign, the head angle for lam, lam
+     converted to radians twice); from the engine's own values, a non-symmetric M (a triangle
+     mirrored undoes it) and a forward solve without the constraint rows. Their share is the
+     part of ``|r|^2`` that undoing them removes, ``1 - |r - s|^2 / |r|^2``: a discrete cause
+     cannot claim a small difference that merely points its way.
+
+   The best cause must explain at least ``LOCALIZED`` (90 %) of the whole difference *and* of
+   each differing term (one large difference would otherwise hide a second mistake); a tie is
+   settled in the order of `KINDS` (the discrete mistake, then one parameter, a Table 1 input,
+   a parameter in one term). When no single cause explains ``EXPLAINED`` of it, pairs of
+   parameters (and the gyroscopic and contact terms) are tried (e.g. two swapped inertias).
+   Otherwise diagnose says that no single cause explains it and lists the best candidates, and
+   each differing term's own best cause.
 
 The body follows from the parameter: ``I2*, m2, R_rear`` body 2 (rear wheel); ``x3, z3, m3,
 I3*, cv`` body 3 (frame+rider; cv is its drag); ``xa, za, dx4, dz4, m4, I4*`` body 4
@@ -44,10 +67,12 @@ import numpy as np
 
 from engines import load_engine
 from engines.base import Engine
-from reference_model import Model, ParameterError
+from reference_model import COORDINATES, Model, ParameterError
 from reference_model.params import (BODY_NAMES, CONTACT_MODELS, PARAMETER_NAMES, PARAMETER_UNITS,
                                     resolve_model)
 
+from .causes import (KINDS, Cause, coordinate_swap_causes, parameter_term_causes, table1_causes,
+                     term_sign_causes, torque_causes)
 from .terms import States, TermComparison, compare_terms, entry_name, random_states
 from .tolerances import Tolerance, load_tolerances
 
@@ -66,6 +91,7 @@ TERM_TOLERANCE: dict[str, tuple[str, tuple[str, ...]]] = {
 STRUCTURAL = ("gyroscopic", "contact")
 COMPARED_ENGINES = ("pinocchio", "exudyn")
 EXPLAINED = 0.99          # fraction of the discrepancy a cause must explain to be named alone
+LOCALIZED = 0.90          # below this share nothing is printed as localized: no single cause
 DEFAULT_STATES = 24
 DEFAULT_SEED = 11
 _REL_STEP = 1e-5          # finite-difference step relative to the parameter
@@ -109,10 +135,14 @@ def cause_label(cause: str) -> str:
             "contact": "front contact model"}.get(cause, cause)
 
 
-def format_localization(terms: Sequence[str], causes: Sequence[str], body: int | None) -> str:
-    """E.g. 'M, Qv via I3xz (body 3 frame+rider)'."""
-    what = ", ".join(t for t in TERMS if t in terms) or "nothing"
-    return f"{what} via {' + '.join(cause_label(c) for c in causes)} ({body_label(body)})"
+def format_localization(terms: Sequence[str], causes: Sequence[str], body: int | None,
+                        labels: Sequence[str] = (), body_text: str | None = None) -> str:
+    """E.g. 'M, Qv via I3xz (body 3 frame+rider)'; ``labels`` name the causes (default:
+    `cause_label`), ``body_text`` replaces the body's ' (...)' (`Explanation.body_text`)."""
+    what = ", ".join(t for t in TERMS + ("ddq",) if t in terms) or "nothing"
+    named = labels or [cause_label(c) for c in causes]
+    tail = f" ({body_label(body)})" if body_text is None else body_text
+    return f"{what} via {' + '.join(named)}{tail}"
 
 
 # -- the terms of the equations of motion ------------------------------------------------------
@@ -125,18 +155,16 @@ def model_terms(model: Model, states: States) -> dict[str, np.ndarray]:
             "dD dq": model.constraint_bias(q, dq)}
 
 
-def engine_terms(engine: Engine, states: States) -> dict[str, np.ndarray]:
-    """The terms an engine provides, taken out through the Engine interface only.
-
-    Qgrav is ``gravity`` or the generalized forces at rest, ``F(q, 0, 0)``; Qv is
-    ``-inverse_dynamics(q, dq, 0) - Qgrav`` or ``(F(q, dq, 0) + F(q, -dq, 0))/2 - Qgrav`` (Qv is
-    even in dq, Qaero odd); Qaero ``(F(q, dq, 0) - F(q, -dq, 0))/2``; column k of S
-    ``F(q, 0, e_k) - F(q, 0, 0)``.
-    """
+def _extract(engine: Engine, states: States, extras: bool
+             ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], "SolveValues | None"]:
+    """(terms, copies, solve): the terms as `engine_terms` gives them; with ``extras``, the
+    copies of Qgrav and Qv taken out of ``generalized_forces`` where the terms came from
+    gravity() and inverse_dynamics(), and the engine's forward solve against its own terms."""
     q, dq = states.q, states.dq
     n = len(states)
     zero3 = np.zeros((n, 3))
     out: dict[str, np.ndarray] = {}
+    copies: dict[str, np.ndarray] = {}
     has = engine.supports
     if has("mass_matrix"):
         out["M"] = np.asarray(engine.mass_matrix(q), dtype=float)
@@ -144,6 +172,8 @@ def engine_terms(engine: Engine, states: States) -> dict[str, np.ndarray]:
         if has("generalized_forces") else None
     if has("gravity"):
         out["Qgrav"] = np.asarray(engine.gravity(q), dtype=float)
+        if rest is not None:
+            copies["Qgrav"] = rest
     elif rest is not None:
         out["Qgrav"] = rest
     if has("inverse_dynamics") and "Qgrav" in out:
@@ -152,7 +182,11 @@ def engine_terms(engine: Engine, states: States) -> dict[str, np.ndarray]:
     if rest is not None:
         plus = np.asarray(engine.generalized_forces(q, dq, zero3), dtype=float)
         minus = np.asarray(engine.generalized_forces(q, -dq, zero3), dtype=float)
-        out.setdefault("Qv", 0.5 * (plus + minus) - out["Qgrav"])
+        # F's own Qv: its own gravity (F at rest) taken off, so one mistake in F shows once
+        Qv = 0.5 * (plus + minus) - rest
+        if "Qv" in out:
+            copies["Qv"] = Qv
+        out["Qv"] = out.get("Qv", Qv)
         out["Qaero"] = 0.5 * (plus - minus)
         cols = []
         for k in range(3):
@@ -164,7 +198,58 @@ def engine_terms(engine: Engine, states: States) -> dict[str, np.ndarray]:
         out["D"] = np.asarray(engine.constraint_jacobian(q), dtype=float)
     if has("constraint_bias"):
         out["dD dq"] = np.asarray(engine.constraint_bias(q, dq), dtype=float)
-    return {t: out[t] for t in TERMS if t in out}
+    terms = {t: out[t] for t in TERMS if t in out}
+    solve = None
+    if extras and all(has(c) for c in SOLVE_NEEDS):
+        F = np.asarray(engine.generalized_forces(q, dq, states.T), dtype=float)
+        ddq = np.asarray(engine.forward_acceleration(q, dq, states.T), dtype=float)
+        solve = solve_values(ddq, terms["M"], F, terms["D"], terms["dD dq"])
+    return terms, (copies if extras else {}), solve
+
+
+def engine_terms(engine: Engine, states: States) -> dict[str, np.ndarray]:
+    """The terms an engine provides, taken out through the Engine interface only.
+
+    Qgrav is ``gravity`` or the generalized forces at rest, ``F(q, 0, 0)``; Qv is
+    ``-inverse_dynamics(q, dq, 0) - Qgrav`` or ``(F(q, dq, 0) + F(q, -dq, 0))/2 - F(q, 0, 0)``
+    (Qv is even in dq, Qaero odd); Qaero ``(F(q, dq, 0) - F(q, -dq, 0))/2``; column k of S
+    ``F(q, 0, e_k) - F(q, 0, 0)``.
+    """
+    return _extract(engine, states, extras=False)[0]
+
+
+#: what the check of an engine's forward solve needs from it
+SOLVE_NEEDS = ("mass_matrix", "generalized_forces", "constraint_jacobian", "constraint_bias",
+               "forward_acceleration")
+
+
+@dataclass(frozen=True)
+class SolveValues:
+    """An engine's forward accelerations and the solves of its own terms they are checked
+    against: the constrained one ([M D^T; D 0] [ddq; lambda] = [F; -dD dq]) and the two ways
+    a solve is commonly got wrong."""
+
+    ddq: np.ndarray            # the engine's forward_acceleration
+    own: np.ndarray            # the constrained solve of the engine's own M, F, D, dD dq
+    unconstrained: np.ndarray  # M^-1 F: the constraint rows left out
+    bias_flipped: np.ndarray   # the solve with +dD dq on the right-hand side
+
+
+def _kkt(M, F, D, rhs):
+    n, m = M.shape[-1], D.shape[-2]
+    K = np.zeros(M.shape[:-2] + (n + m, n + m))
+    K[..., :n, :n], K[..., :n, n:], K[..., n:, :n] = M, np.swapaxes(D, -1, -2), D
+    return np.linalg.solve(K, np.concatenate([F, rhs], axis=-1)[..., None])[..., :n, 0]
+
+
+def solve_values(ddq, M, F, D, bias) -> SolveValues | None:
+    """`SolveValues` of an engine (None where its own terms make a singular system)."""
+    try:
+        with np.errstate(all="ignore"):
+            return SolveValues(ddq, _kkt(M, F, D, -bias),
+                               np.linalg.solve(M, F[..., None])[..., 0], _kkt(M, F, D, bias))
+    except np.linalg.LinAlgError:
+        return None
 
 
 def _scales(term: str, ref: Mapping[str, np.ndarray], tol: Tolerance) -> np.ndarray:
@@ -172,6 +257,56 @@ def _scales(term: str, ref: Mapping[str, np.ndarray], tol: Tolerance) -> np.ndar
     parts = TERM_TOLERANCE[term][1]
     n = ref[term].shape[0]
     return np.array([tol.normalizer(ref[term][k], [ref[p][k] for p in parts]) for k in range(n)])
+
+
+#: a block's source -> how the term table names it
+SOURCE_LABEL = {"": "", "F": " in F", "solve": " solve"}
+
+
+@dataclass(frozen=True)
+class Block:
+    """One compared array: a term of one engine from one source ('' its own method, 'F' the
+    copy taken out of generalized_forces, 'solve' the forward accelerations against the solve
+    of the engine's own terms), its reference, and the per-state scale of its tolerance."""
+
+    engine: str
+    term: str
+    source: str
+    value: np.ndarray
+    reference: np.ndarray
+    scale: np.ndarray
+    tolerance: float
+
+    @property
+    def label(self) -> str:
+        return self.term + SOURCE_LABEL[self.source]
+
+    def weighted(self, a: np.ndarray) -> np.ndarray:
+        return a / self.scale.reshape((-1,) + (1,) * (a.ndim - 1))
+
+
+def term_blocks(ref: Mapping[str, np.ndarray], engine_values: Mapping[str, Mapping[str, np.ndarray]],
+                tolerances: Mapping[str, Tolerance] | None = None,
+                copies: Mapping[str, Mapping[str, np.ndarray]] | None = None,
+                solves: Mapping[str, SolveValues | None] | None = None) -> list[Block]:
+    """Every compared array of every engine (`Block`), its terms first."""
+    tols = tolerances or load_tolerances()
+    scale = {t: _scales(t, ref, tols[TERM_TOLERANCE[t][0]])
+             for t in {t for v in engine_values.values() for t in v}}
+    out = []
+    for name, values in engine_values.items():
+        for term, E in values.items():
+            out.append(Block(name, term, "", E, ref[term], scale[term],
+                             tols[TERM_TOLERANCE[term][0]].tolerance))
+        for term, E in (copies or {}).get(name, {}).items():
+            out.append(Block(name, term, "F", E, ref[term], scale[term],
+                             tols[TERM_TOLERANCE[term][0]].tolerance))
+        solve = (solves or {}).get(name)
+        if solve is not None:
+            tol = tols["forward_acceleration"]
+            s = np.array([tol.normalizer(o) for o in solve.own])
+            out.append(Block(name, "ddq", "solve", solve.ddq, solve.own, s, tol.tolerance))
+    return out
 
 
 @dataclass(frozen=True)
@@ -186,42 +321,60 @@ class TermCheck:
     passed: bool
     worst_state: int
     entries: tuple[str, ...]  # the entries above tolerance, worst first (at most 3), else the worst
+    source: str = ""          # '' the engine's own method, 'F' generalized_forces, 'solve'
+
+    @property
+    def label(self) -> str:
+        return self.term + SOURCE_LABEL[self.source]
 
     def describe(self) -> str:
         verdict = "ok" if self.passed else "DIFFERS"
-        return (f"{self.term} vs {self.engine}: {verdict}, max error {self.max_error:.2e} "
+        return (f"{self.label} vs {self.engine}: {verdict}, max error {self.max_error:.2e} "
                 f"(tolerance {self.tolerance:.0e}) at {', '.join(self.entries)}")
 
     def to_dict(self) -> dict:
         return {"engine": self.engine, "term": self.term, "max_error": self.max_error,
                 "max_abs_error": self.max_abs_error, "tolerance": self.tolerance,
                 "passed": self.passed, "worst_state": self.worst_state,
-                "entries": list(self.entries)}
+                "entries": list(self.entries), "source": self.source}
+
+
+def _entry(term: str, index: tuple[int, ...]) -> str:
+    return entry_name(term, index) if term != "ddq" else f"ddq[{COORDINATES[index[0]]}]"
+
+
+def check_block(b: Block) -> TermCheck:
+    """A block against its tolerance: the worst entries over the whole array (a matrix's lower
+    triangle too, so a non-symmetric M shows where; an entry whose mirror is already named
+    with the same error is not named twice)."""
+    diff = np.abs(b.value - b.reference)
+    rel = diff / b.scale.reshape((-1,) + (1,) * (diff.ndim - 1))
+    rel = np.where(np.isfinite(rel), rel, np.inf)
+    per_entry = rel.max(axis=0)
+    k = int(np.unravel_index(int(np.argmax(rel)), rel.shape)[0])
+    order = np.argsort(per_entry, axis=None, kind="stable")[::-1]
+    named: list[tuple[int, ...]] = []
+    for i in order:
+        idx = tuple(int(j) for j in np.unravel_index(i, per_entry.shape))
+        if named and per_entry[idx] <= b.tolerance:
+            break
+        mirror = idx[::-1]
+        if b.term == "M" and mirror in named and \
+                abs(per_entry[mirror] - per_entry[idx]) <= 1e-9 * per_entry[idx]:
+            continue
+        named.append(idx)
+        if len(named) == 3:
+            break
+    err = float(rel.max())
+    return TermCheck(b.engine, b.term, err, float(diff.max()), b.tolerance,
+                     bool(err <= b.tolerance), k, tuple(_entry(b.term, i) for i in named),
+                     b.source)
 
 
 def check_terms(ref: Mapping[str, np.ndarray], engine_values: Mapping[str, Mapping[str, np.ndarray]],
                 tolerances: Mapping[str, Tolerance] | None = None) -> list[TermCheck]:
     """Every term each engine provides against the model's (``ref`` from `model_terms`)."""
-    tols = tolerances or load_tolerances()
-    out = []
-    for name, values in engine_values.items():
-        for term, E in values.items():
-            tol = tols[TERM_TOLERANCE[term][0]]
-            diff = np.abs(E - ref[term])
-            rel = diff / _scales(term, ref, tol).reshape((-1,) + (1,) * (diff.ndim - 1))
-            rel = np.where(np.isfinite(rel), rel, np.inf)
-            per_entry = rel.max(axis=0)
-            if term == "M":   # symmetric: name each entry once, as M[row, col] with row <= col
-                per_entry = np.where(np.tri(*per_entry.shape, -1, dtype=bool), -np.inf, per_entry)
-            k = int(np.unravel_index(int(np.argmax(rel)), rel.shape)[0])
-            order = np.argsort(per_entry, axis=None)[::-1]
-            over = [i for i in order[:3] if per_entry.flat[i] > tol.tolerance] or [order[0]]
-            entries = tuple(entry_name(term, tuple(int(j) for j in np.unravel_index(i, per_entry.shape)))
-                            for i in over)
-            err = float(rel.max())
-            out.append(TermCheck(name, term, err, float(diff.max()), tol.tolerance,
-                                 bool(err <= tol.tolerance), k, entries))
-    return out
+    return [check_block(b) for b in term_blocks(ref, engine_values, tolerances)]
 
 
 # -- causes: their effect on the model's terms -------------------------------------------------
@@ -268,21 +421,118 @@ def cause_effects(model: Model, states: States, terms: Sequence[str]) -> dict[st
     return effects
 
 
+def _value(model: Model, cause: str) -> float | str:
+    if cause == "contact":
+        return model.contact
+    if cause == "gyroscopic":
+        return "with" if model.gyroscopic else "without"
+    return float(getattr(model.params, cause))
+
+
+class ModelCauses:
+    """The candidate causes that follow from the model alone (its parameters, terms, Table 1)
+    at one set of states, built once per set of compared terms and shared by every engine
+    compared with that model (the planted-bug suite and the fault suite compare many)."""
+
+    def __init__(self, model: Model, states: States):
+        self.model, self.states = model, states
+        self._built: dict[tuple, list[Cause]] = {}
+
+    def get(self, ref: Mapping[str, np.ndarray], terms: Sequence[str],
+            sources: Mapping[str, tuple[str, ...]]) -> list[Cause]:
+        key = (tuple(terms), tuple(sorted(sources.items())))
+        if key not in self._built:
+            self._built[key] = _model_causes(self.model, self.states, ref, terms, sources)
+        return self._built[key]
+
+
+def _model_causes(model: Model, states: States, ref: Mapping[str, np.ndarray],
+                  terms: Sequence[str], sources: Mapping[str, tuple[str, ...]]) -> list[Cause]:
+    effects = cause_effects(model, states, terms)
+    out = [Cause(c, cause_label(c), cause_body(c), "structural" if c in STRUCTURAL else "parameter",
+                 False, {(t, None): e for t, e in eff.items()},
+                 PARAMETER_UNITS.get(c, ""), _value(model, c))
+           for c, eff in effects.items()]
+    out += parameter_term_causes(effects, model, PARAMETER_UNITS, parameter_body)
+    out += term_sign_causes(ref, sources)
+    if "S" in terms:
+        out += torque_causes(ref["S"], states.q)
+    out += coordinate_swap_causes(model_terms, model, states, ref, terms)
+    out += table1_causes(model, states, model_terms, terms)
+    return out
+
+
+def candidate_causes(model: Model, states: States, ref: Mapping[str, np.ndarray],
+                     blocks: Sequence[Block], solves: Mapping[str, SolveValues | None] | None = None,
+                     shared: ModelCauses | None = None) -> list[Cause]:
+    """Every candidate cause (`comparisons.judgments.causes`) for the blocks' terms: the 30
+    parameters and the gyroscopic and contact terms (as before), each parameter in one term
+    only, each term's sign flipped or the term missing, the rider torques' sign, columns and
+    bodies, two coordinates swapped in a term's arguments, a model's Table 1 inputs and slips
+    (these from the model alone: ``shared`` keeps them for the next engine), and from the
+    engines' own values: a non-symmetric M, a forward solve without the constraint rows or
+    with the bias's sign flipped."""
+    terms = [t for t in TERMS if any(b.term == t for b in blocks)]
+    sources = {t: tuple(dict.fromkeys(b.source for b in blocks if b.term == t)) for t in terms}
+    out = list((shared or ModelCauses(model, states)).get(ref, terms, sources))
+    for b in blocks:
+        if b.term == "M" and b.source == "":
+            for part, lower in (("upper", True), ("lower", False)):
+                mirrored = _mirrored(b.value, lower)
+                out.append(Cause(f"triangle:M:{part}", f"M not symmetric: its "
+                                 f"{'lower' if lower else 'upper'} triangle is wrong (M with its "
+                                 f"{part} triangle mirrored agrees)", None,
+                                 "structural", True, {("M", ""): b.value - mirrored}, engine=b.engine))
+        if b.term == "ddq":
+            sv = solves[b.engine]
+            out.append(Cause("solve:unconstrained", "forward_acceleration solves M ddq = F without "
+                             "the constraint rows (D ddq = -dD dq left out)", None, "structural",
+                             True, {("ddq", "solve"): sv.unconstrained - sv.own}, engine=b.engine))
+            out.append(Cause("solve:bias-sign", "forward_acceleration solves with D ddq = +dD dq "
+                             "(the constraint bias's sign flipped in the solve)", None,
+                             "structural", True, {("ddq", "solve"): sv.bias_flipped - sv.own},
+                             engine=b.engine))
+    return out
+
+
+def _mirrored(M: np.ndarray, from_upper: bool) -> np.ndarray:
+    """M with one triangle copied onto the other (the diagonal kept)."""
+    tri = np.triu(M) if from_upper else np.tril(M)
+    return tri + np.swapaxes(tri, -1, -2) - M * np.eye(M.shape[-1])
+
+
 @dataclass(frozen=True)
 class Explanation:
     """The best explanation of a discrepancy by one cause (or a pair)."""
 
-    causes: tuple[str, ...]       # parameter names, 'gyroscopic' or 'contact'
+    causes: tuple[str, ...]       # cause ids: parameter names, 'gyroscopic', 'contact', or the
+                                  # ids of `candidate_causes` (e.g. 'sign:Qgrav[F]', 'table1:lam')
     estimates: tuple[float, ...]  # fitted change (engines minus model): SI for a parameter; for a
                                   # structural cause the coefficient (1 = fully the other variant)
     explained: float              # fraction of the squared discrepancy explained by the fit
     body: int | None
     runner_up: tuple[str, float] | None = None   # next best single cause and its fraction
-    model_values: tuple[float | str, ...] = ()   # the model's value of each cause
+    model_values: tuple[float | str | None, ...] = ()   # the model's value of each cause
+    labels: tuple[str, ...] = ()  # readable name of each cause
+    kinds: tuple[str, ...] = ()   # `KINDS` of each cause
+    units: tuple[str, ...] = ()   # unit of each estimate
+    candidates: tuple[tuple[str, str, float, tuple[str, ...]], ...] = ()
+    # the best single causes: (id, label, share, the differing terms it leaves unexplained)
+    unexplained: tuple[str, ...] = ()   # differing terms (rows) the causes explain < LOCALIZED of
+    per_term: tuple[tuple[str, str, float], ...] = ()
+    # (differing row, the cause that best explains that row alone, its share of the row)
+
+    def _labels(self) -> tuple[str, ...]:
+        return self.labels or tuple(cause_label(c) for c in self.causes)
 
     def describe(self) -> str:
         parts = []
-        for cause, est, value in zip(self.causes, self.estimates, self.model_values):
+        kinds = self.kinds or tuple("structural" if c in STRUCTURAL else "parameter"
+                                    for c in self.causes)
+        units = self.units or tuple(PARAMETER_UNITS.get(c, "") for c in self.causes)
+        for cause, est, value, kind, unit, label in zip(self.causes, self.estimates,
+                                                         self.model_values, kinds, units,
+                                                         self._labels()):
             if cause == "contact":
                 parts.append(f"engines' front contact is the other model (coefficient {est:.3f}; "
                              f"the model under test: {value!r})")
@@ -291,29 +541,62 @@ class Explanation:
                              if value == "without" else
                              "the engines lack the gyroscopic terms the model under test has")
                 parts[-1] += f" (coefficient {est:.3f})"
+            elif kind == "structural":
+                parts.append("undoing it in the model's terms removes that share (taken at full "
+                             "size, no fitted coefficient)")
+            elif kind == "term-parameter":
+                name, term = cause.split("@")
+                parts.append(f"d{name} = {est:+.5g} {unit} in {term} only (model {value:.6g}, "
+                             f"that term's fit {value + est:.6g} {unit})")
+                if term in ("D", "dD dq"):
+                    parts[-1] += f": D and dD dq were built with different {name}"
+            elif kind == "table1":
+                name = cause.split(":", 1)[1]
+                parts.append(f"d{name} = {est:+.5g} {unit} in Table 1 (model built from "
+                             f"{name} = {value:.6g}, engines' fit {value + est:.6g} {unit})")
             else:
-                unit = PARAMETER_UNITS[cause]
                 parts.append(f"d{cause} = {est:+.5g} {unit} (model {value:.6g}, engines' fit "
                              f"{value + est:.6g} {unit})")
-        text = (f"{' + '.join(cause_label(c) for c in self.causes)} ({body_label(self.body)}) "
+        text = (f"{' + '.join(self._labels())}{self.body_text} "
                 f"explains {100 * self.explained:.2f}% of the difference: {'; '.join(parts)}")
         if len(self.causes) == 2 and _looks_swapped(self):
             text += f"; looks like {self.causes[0]} and {self.causes[1]} swapped"
         if self.runner_up:
-            text += f"; next best single cause {cause_label(self.runner_up[0])} " \
-                    f"({100 * self.runner_up[1]:.1f}%)"
+            label = next((c[1] for c in self.candidates if c[0] == self.runner_up[0]),
+                         cause_label(self.runner_up[0]))
+            text += f"; next best single cause {label} ({100 * self.runner_up[1]:.1f}%)"
         return text
+
+    @property
+    def body_text(self) -> str:
+        """' (body 3 frame+rider)', ' (all bodies)'; nothing for a mistake in a term's
+        structure (a sign, a solve, a swap), which belongs to no body."""
+        kinds = self.kinds or ("parameter",)
+        if self.body is None and all(k == "structural" for k in kinds) and \
+                not set(self.causes) & set(STRUCTURAL):
+            return ""
+        return f" ({body_label(self.body)})"
+
+    def best_candidates(self, n: int = 3) -> str:
+        """'label 45.1%, label 12.0%, ...': the best single causes and their shares."""
+        return ", ".join(f"{lab} {100 * s:.1f}%" + (f" (leaves {', '.join(u)} unexplained)" if u else "")
+                         for _, lab, s, u in self.candidates[:n]) or "none"
 
     def to_dict(self) -> dict:
         return {"causes": list(self.causes), "estimates": list(self.estimates),
                 "explained": self.explained, "body": self.body,
                 "runner_up": list(self.runner_up) if self.runner_up else None,
-                "model_values": list(self.model_values)}
+                "model_values": list(self.model_values), "labels": list(self._labels()),
+                "localized": self.explained >= LOCALIZED and not self.unexplained,
+                "unexplained": list(self.unexplained),
+                "per_term": [{"term": t, "label": lab, "explained": x} for t, lab, x in self.per_term],
+                "candidates": [{"cause": c, "label": lab, "explained": s, "unexplained": list(u)}
+                               for c, lab, s, u in self.candidates]}
 
 
 def _looks_swapped(e: Explanation) -> bool:
     (a, b), (da, db) = e.causes, e.estimates
-    if a in STRUCTURAL or b in STRUCTURAL or PARAMETER_UNITS[a] != PARAMETER_UNITS[b]:
+    if a not in PARAMETER_UNITS or b not in PARAMETER_UNITS or PARAMETER_UNITS[a] != PARAMETER_UNITS[b]:
         return False
     va, vb = e.model_values
     return abs(da + db) <= 0.05 * abs(da) and abs(va + da - vb) <= 0.05 * abs(da)
@@ -323,65 +606,132 @@ def _stack(blocks: Sequence[np.ndarray]) -> np.ndarray:
     return np.concatenate([np.ravel(b) for b in blocks]) if blocks else np.zeros(0)
 
 
+def _effect_vector(cause: Cause, blocks: Sequence[Block]) -> np.ndarray:
+    parts = []
+    for b in blocks:
+        e = cause.effect(b.term, b.source) if cause.engine in (None, b.engine) else None
+        parts.append(b.weighted(e) if e is not None else np.zeros(b.value.shape))
+    return _stack(parts)
+
+
+#: two shares closer than this are a tie, settled by `KINDS` (e.g. 'sign of Qgrav flipped'
+#: and g = -9.81 explain the same difference; the discrete mistake is the likelier)
+_TIE = 1e-6
+
+
 def explain(model: Model, states: States, ref: Mapping[str, np.ndarray],
             engine_values: Mapping[str, Mapping[str, np.ndarray]],
-            tolerances: Mapping[str, Tolerance] | None = None) -> Explanation | None:
+            tolerances: Mapping[str, Tolerance] | None = None,
+            copies: Mapping[str, Mapping[str, np.ndarray]] | None = None,
+            solves: Mapping[str, SolveValues | None] | None = None,
+            shared: ModelCauses | None = None) -> Explanation | None:
     """Least-squares localization of ``engine - model`` onto the causes (see the module
-    docstring); None when there is nothing to explain."""
-    tols = tolerances or load_tolerances()
-    terms = sorted({t for v in engine_values.values() for t in v}, key=TERMS.index)
-    scale = {t: _scales(t, ref, tols[TERM_TOLERANCE[t][0]]) for t in terms}
-
-    def weigh(t, a):
-        return a / scale[t].reshape((-1,) + (1,) * (a.ndim - 1))
-
-    r = _stack([weigh(t, E - ref[t]) for v in engine_values.values() for t, E in v.items()])
+    docstring); None when there is nothing to explain. ``copies``, ``solves``: `localize`'s
+    second copies of terms and forward solves; ``shared``: the model's causes, kept for the
+    next engine compared with the same model at the same states."""
+    blocks = term_blocks(ref, engine_values, tolerances, copies, solves)
+    r = _stack([b.weighted(b.value - b.reference) for b in blocks])
     rr = float(r @ r)
     if not np.isfinite(rr) or rr == 0.0:
         return None
-    effects = cause_effects(model, states, terms)
-    causes = list(effects)
-    S = np.stack([_stack([weigh(t, effects[c][t]) for v in engine_values.values() for t in v])
-                  for c in causes], axis=1)
-    G = S.T @ S
+    causes = candidate_causes(model, states, ref, blocks, solves, shared)
+    S = np.stack([_effect_vector(c, blocks) for c in causes], axis=1)
+    G = np.einsum("ij,ij->j", S, S)
     b = S.T @ r
-    g = np.diag(G)
-    ok = g > 0
-    single = np.where(ok, b ** 2 / np.where(ok, g, 1.0) / rr, 0.0)
-    order = np.argsort(single)[::-1]
-    best = int(order[0])
+    ok = (G > 0) & np.isfinite(G)
+    fixed = np.array([c.fixed for c in causes])
+    with np.errstate(all="ignore"):
+        coef = np.where(fixed, 1.0, b / np.where(ok, G, 1.0))
+    share = _share(coef, b, G, rr, ok)
+    # each differing block must be explained too: a share is a sum of squares, so one large
+    # difference would otherwise hide a second, smaller mistake in another term
+    segments = _segments(blocks)
+    worst = np.ones(len(causes))
+    rank = [KINDS.index(c.kind) for c in causes]
+    per_term = []     # each differing block's own best cause (its coefficient fitted there)
+    for (lo, hi), label in segments:
+        Sb = S[lo:hi]
+        bb, Gb, rb = Sb.T @ r[lo:hi], np.einsum("ij,ij->j", Sb, Sb), float(r[lo:hi] @ r[lo:hi])
+        worst = np.minimum(worst, _share(coef, bb, Gb, rb, ok, clip=False))
+        okb = ok & (Gb > 0)
+        with np.errstate(all="ignore"):
+            own = _share(np.where(fixed, 1.0, bb / np.where(okb, Gb, 1.0)), bb, Gb, rb, okb)
+        i = min(range(len(causes)), key=lambda i: (-round(float(own[i]), 6), rank[i]))
+        if own[i] > 0.0:
+            per_term.append((label, causes[i].label, float(own[i])))
+    whole = [i for i in range(len(causes)) if share[i] >= LOCALIZED and worst[i] >= LOCALIZED]
+    pool = whole or range(len(causes))
+    top = max(share[i] for i in pool)
+    best = min((i for i in pool if share[i] >= top - _TIE), key=lambda i: (rank[i], -share[i]))
+    order = sorted(range(len(causes)), key=lambda i: (i != best, -share[i], rank[i]))
 
-    def values(cs):
+    def missed(coefs, idx):
         out = []
-        for c in cs:
-            if c == "contact":
-                out.append(model.contact)
-            elif c == "gyroscopic":
-                out.append("with" if model.gyroscopic else "without")
-            else:
-                out.append(float(getattr(model.params, c)))
-        return tuple(out)
+        for (lo, hi), label in segments:
+            rb = r[lo:hi]
+            left = rb - S[lo:hi, list(idx)] @ np.asarray(coefs)
+            if float(left @ left) > (1.0 - LOCALIZED) * float(rb @ rb):
+                out.append(label)
+        return tuple(dict.fromkeys(out))
 
-    chosen = ((causes[best],), (float(b[best] / G[best, best]),), float(single[best]))
-    runner = (causes[int(order[1])], float(single[order[1]]))
+    seen, listed = set(), []
+    for i in order:
+        if share[i] <= 0.0 or causes[i].label in seen:
+            continue
+        seen.add(causes[i].label)
+        listed.append((causes[i].id, causes[i].label, float(share[i]), missed([coef[i]], [i])))
+        if len(listed) == 5:
+            break
+    runner_i = next((i for i in order if i != best), None)
+    chosen = ((best,), (float(coef[best]),), float(share[best]))
+    runner = (causes[runner_i].id, float(share[runner_i])) if runner_i is not None else None
+    classic = [i for i, c in enumerate(causes) if c.id in PARAMETER_NAMES or c.id in STRUCTURAL]
     if chosen[2] < EXPLAINED:
+        Gc = S[:, classic].T @ S[:, classic]
         best_pair = None
-        for i, j in itertools.combinations(np.flatnonzero(ok), 2):
-            A = G[np.ix_([i, j], [i, j])]
+        for a, c in itertools.combinations(range(len(classic)), 2):
+            if not (ok[classic[a]] and ok[classic[c]]):
+                continue
+            A = Gc[np.ix_([a, c], [a, c])]
             det = A[0, 0] * A[1, 1] - A[0, 1] ** 2
             if det <= 1e-9 * A[0, 0] * A[1, 1]:
                 continue   # (nearly) the same effect: the pair says nothing more than one
-            x = np.linalg.solve(A, b[[i, j]])
-            frac = float(x @ b[[i, j]]) / rr
+            rhs = b[[classic[a], classic[c]]]
+            x = np.linalg.solve(A, rhs)
+            frac = float(x @ rhs) / rr
             if best_pair is None or frac > best_pair[2]:
-                best_pair = ((causes[i], causes[j]), (float(x[0]), float(x[1])), frac)
+                best_pair = ((classic[a], classic[c]), (float(x[0]), float(x[1])), frac)
         if best_pair and best_pair[2] >= max(EXPLAINED, chosen[2] + 0.05):
             chosen = best_pair
-            runner = (causes[best], float(single[best]))
-    cs, est, frac = chosen
-    bodies = {cause_body(c) for c in cs}
+            runner = (causes[best].id, float(share[best]))
+    idx, est, frac = chosen
+    picked = [causes[i] for i in idx]
+    bodies = {c.body for c in picked}
     body = bodies.pop() if len(bodies) == 1 else None
-    return Explanation(cs, est, min(frac, 1.0), body, runner, values(cs))
+    return Explanation(tuple(c.id for c in picked), est, min(frac, 1.0), body, runner,
+                       tuple(c.value for c in picked), tuple(c.label for c in picked),
+                       tuple(c.kind for c in picked), tuple(c.unit for c in picked),
+                       tuple(listed), missed(est, idx), tuple(per_term))
+
+
+def _share(coef, b, G, rr, ok, clip=True):
+    """The fraction of ``rr`` each cause removes at its coefficient: ``2 x b - x^2 G`` over
+    ``rr`` (the least-squares x gives ``b^2 / (G rr)``; a discrete cause's x is 1)."""
+    with np.errstate(all="ignore"):
+        out = (2.0 * coef * b - coef ** 2 * G) / rr
+    out = np.where(ok & np.isfinite(out), out, 0.0 if clip else -np.inf)
+    return np.clip(out, 0.0, 1.0) if clip else out
+
+
+def _segments(blocks: Sequence[Block]) -> list[tuple[tuple[int, int], str]]:
+    """((start, stop), label) in the stacked residual of each block that fails its tolerance."""
+    out, lo = [], 0
+    for b in blocks:
+        hi = lo + b.value.size
+        if not check_block(b).passed:
+            out.append(((lo, hi), b.label))
+        lo = hi
+    return out
 
 
 # -- localization ------------------------------------------------------------------------------
@@ -393,10 +743,11 @@ class Localization:
     quantities: tuple[TermComparison, ...]   # compare_terms, every engine
     checks: tuple[TermCheck, ...]            # term by term, every engine
     explanation: Explanation | None
+    solve_checks: tuple[TermCheck, ...] = ()  # each engine's ddq against its own terms' solve
 
     @property
     def agrees(self) -> bool:
-        return all(c.passed for c in self.quantities) and all(c.passed for c in self.checks)
+        return all(c.passed for c in self.quantities + self.checks + self.solve_checks)
 
     @property
     def detected(self) -> bool:
@@ -404,22 +755,40 @@ class Localization:
         return not all(c.passed for c in self.quantities)
 
     @property
+    def localized(self) -> bool:
+        """A single cause (or pair) explains at least `LOCALIZED` of the difference."""
+        e = self.explanation
+        return e is not None and e.explained >= LOCALIZED and not e.unexplained
+
+    @property
     def terms(self) -> tuple[str, ...]:
-        """The terms that differ (any engine), in TERMS order."""
-        bad = {c.term for c in self.checks if not c.passed}
-        return tuple(t for t in TERMS if t in bad)
+        """The terms that differ (any engine), in TERMS order, then 'ddq' for a forward solve
+        that is not the solve of the engine's own terms."""
+        bad = {c.term for c in self.checks + self.solve_checks if not c.passed}
+        return tuple(t for t in TERMS + ("ddq",) if t in bad)
 
     @property
     def entries(self) -> tuple[str, ...]:
         """Worst entries of the failing compared quantities (compare_terms' worst_entry)."""
         return tuple(dict.fromkeys(c.worst_entry for c in self.quantities if not c.passed))
 
+    @property
+    def differing_entries(self) -> tuple[str, ...]:
+        """The entries above tolerance of every differing term, then of the failing quantities."""
+        return tuple(dict.fromkeys([e for c in self.checks + self.solve_checks if not c.passed
+                                    for e in c.entries] + list(self.entries)))
+
     def describe(self) -> str:
         if self.agrees:
             return "everything agrees"
+        what = ', '.join(self.terms) or 'a compared quantity'
         if self.explanation is None:
-            return f"{', '.join(self.terms) or 'a compared quantity'} differ(s); no cause found"
-        text = format_localization(self.terms, self.explanation.causes, self.explanation.body)
+            return f"{what} differ(s); no cause found"
+        if not self.localized:
+            return (f"{what} differ(s); no single cause explains it (best: "
+                    f"{self.explanation.best_candidates(2)})")
+        text = format_localization(self.terms, self.explanation.causes, self.explanation.body,
+                                   self.explanation.labels, self.explanation.body_text)
         if self.explanation.explained < EXPLAINED:
             text += (f", partly: it explains {100 * self.explanation.explained:.0f}% "
                      "(more than one cause?)")
@@ -428,25 +797,35 @@ class Localization:
 
 def localize(model: Model, states: States, engines: Sequence[Engine],
              engine_values: Mapping[str, Mapping[str, np.ndarray]] | None = None,
-             truth: Engine | None = None) -> Localization:
+             truth: Engine | None = None, shared: ModelCauses | None = None) -> Localization:
     """Compare the model (as the reference engine) with each engine and localize any
     difference. ``engine_values`` (engine name -> `engine_terms`) can be passed in when the same
-    engines are compared with many models (the fault suite). ``truth``: another engine to
-    compare with instead of the model (its terms are the baseline; the causes are still fitted
-    on the model's sensitivities, which is what an engine built from the same parameters
-    shares)."""
+    engines are compared with many models (the fault suite); otherwise each engine's terms are
+    also taken a second way where it offers one (Qgrav and Qv out of generalized_forces besides
+    gravity() and inverse_dynamics()) and its forward accelerations are checked against the
+    solve of its own terms. ``truth``: another engine to compare with instead of the model (its
+    terms are the baseline; the causes are still fitted on the model's sensitivities, which is
+    what an engine built from the same parameters shares)."""
     tols = load_tolerances()
-    values = engine_values if engine_values is not None else \
-        {e.name: engine_terms(e, states) for e in engines}
+    copies: dict[str, dict[str, np.ndarray]] = {}
+    solves: dict[str, SolveValues | None] = {}
+    if engine_values is not None:
+        values = engine_values
+    else:
+        values = {}
+        for e in engines:
+            values[e.name], copies[e.name], solves[e.name] = _extract(e, states, extras=True)
     ref_engine = truth if truth is not None else load_engine("reference", model)
     quantities = tuple(c for e in engines for c in compare_terms(ref_engine, e, states))
     ref = model_terms(model, states)
     if truth is not None:
         ref = {**ref, **engine_terms(truth, states)}
-    checks = tuple(check_terms(ref, values, tols))
-    failing = not all(c.passed for c in quantities) or not all(c.passed for c in checks)
-    explanation = explain(model, states, ref, values, tols) if failing else None
-    return Localization(quantities, checks, explanation)
+    blocks = term_blocks(ref, values, tols, copies, solves)
+    checks = tuple(check_block(b) for b in blocks if b.source != "solve")
+    solve_checks = tuple(check_block(b) for b in blocks if b.source == "solve")
+    failing = not all(c.passed for c in quantities + checks + solve_checks)
+    explanation = explain(model, states, ref, values, tols, copies, solves, shared) if failing else None
+    return Localization(quantities, checks, explanation, solve_checks)
 
 
 # -- diagnose: the user's entry point ----------------------------------------------------------
@@ -470,13 +849,21 @@ class Diagnosis:
     def describe(self) -> str:
         """A short readable table and the verdict."""
         loc = self.localization
+        width = max([10] + [len(c.engine) for c in loc.checks])
         against = "engines built from the same file" if self.against is None else self.against
         lines = [f"diagnose {self.model} against {against} "
                  f"(engines: {', '.join(self.engines)}; {self.n_states} states)", "",
-                 f"{'term':6s} {'engine':10s} {'max error':>9s} {'tolerance':>9s}  {'verdict':7s}  worst entries"]
-        for c in loc.checks:
-            lines.append(f"{c.term:6s} {c.engine:10s} {c.max_error:9.1e} {c.tolerance:9.0e}  "
+                 f"{'term':10s} {'engine':{width}s} {'max error':>9s} {'tolerance':>9s}  {'verdict':7s}  worst entries"]
+        for c in loc.checks + loc.solve_checks:
+            lines.append(f"{c.label:10s} {c.engine:{width}s} {c.max_error:9.1e} {c.tolerance:9.0e}  "
                          f"{'ok' if c.passed else 'DIFFERS':7s}  {', '.join(c.entries)}")
+        rows = {c.source for c in loc.checks + loc.solve_checks}
+        if "F" in rows:
+            lines.append("  'in F': the term taken out of generalized_forces (F = Qv + Qgrav + Qaero "
+                         "+ S T), the other row from gravity() / inverse_dynamics()")
+        if "solve" in rows:
+            lines.append("  'ddq solve': forward_acceleration against the constrained solve of the "
+                         "engine's own M, F, D and dD dq")
         bad = [c for c in loc.quantities if not c.passed]
         lines.append("")
         lines.append(f"compared quantities (tolerances.toml): {len(loc.quantities) - len(bad)} of "
@@ -484,9 +871,19 @@ class Diagnosis:
                      + ("" if not bad else "; failing: " + "; ".join(
                          f"{c.quantity} vs {c.engines[1]} {c.max_error:.1e} > {c.tolerance:.0e} "
                          f"at {c.worst_entry}" for c in bad)))
-        if loc.explanation is not None:
+        exp = loc.explanation
+        if exp is not None and loc.localized:
             lines.append(f"localized: {loc.describe()}")
-            lines.append(f"  {loc.explanation.describe()}")
+            lines.append(f"  {exp.describe()}")
+        elif not loc.agrees:
+            lines.append(f"no single cause explains it: {', '.join(loc.terms) or 'a compared quantity'} "
+                         f"differ(s) at {', '.join(loc.differing_entries[:6]) or 'no entry'}")
+            lines.append(f"  best candidates (share of the difference each explains alone, "
+                         f"{100 * LOCALIZED:.0f}% needed): "
+                         + (exp.best_candidates(3) if exp is not None else "none"))
+            if exp is not None and len(exp.per_term) > 1:
+                lines.append("  term by term (more than one mistake?): " + "; ".join(
+                    f"{t}: {lab} {100 * x:.1f}%" for t, lab, x in exp.per_term))
         if self.against is None:
             lines.append(f"compared: engines built from {self.model} against the reference built "
                          f"from {self.model}" + (": the file is interpreted consistently" if
@@ -508,7 +905,8 @@ class Diagnosis:
             "model": self.model, "against": self.against, "engines": list(self.engines),
             "n_states": self.n_states, "agrees": self.agrees,
             "localized_to": None if loc.agrees else loc.describe(),
-            "terms": [c.to_dict() for c in loc.checks],
+            "localized": loc.localized,
+            "terms": [c.to_dict() for c in loc.checks + loc.solve_checks],
             "comparisons": [{"quantity": c.quantity, "engines": list(c.engines),
                              "max_error": c.max_error, "tolerance": c.tolerance,
                              "passed": c.passed, "worst_entry": c.worst_entry}
