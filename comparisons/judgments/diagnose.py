@@ -352,7 +352,7 @@ def check_block(b: Block) -> TermCheck:
     rel = np.where(np.isfinite(rel), rel, np.inf)
     per_entry = rel.max(axis=0)
     k = int(np.unravel_index(int(np.argmax(rel)), rel.shape)[0])
-    order = np.argsort(per_entry, axis=None, kind="stable")[::-1]
+    order = np.argsort(-per_entry, axis=None, kind="stable")   # ties: the upper entry first
     named: list[tuple[int, ...]] = []
     for i in order:
         idx = tuple(int(j) for j in np.unravel_index(i, per_entry.shape))
