@@ -1,5 +1,6 @@
 """``bicycle-xval diagnose``: a parameter file's reference model against the engines, with the
-difference localized (term, entries, parameter, body). The machinery is
+difference localized (term, entries, cause: a parameter or a structural mistake, body), or
+'no single cause explains it' with the best candidates. The machinery is
 `comparisons.judgments.diagnose`."""
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ def add_diagnose_parser(subparsers) -> None:
     [--engine-option k=v] [--against NAME|FILE] [--states N] [--json OUT]``."""
     s = subparsers.add_parser(
         "diagnose", help="compare engines term by term with the reference built from the same "
-                         "parameters and localize any difference (term, entries, parameter, body)")
+                         "parameters and localize any difference (term, entries, cause, body)")
     s.add_argument("file", nargs="?", default=None,
                    help="parameter file (or named model) of the model under test [--model]")
     s.add_argument("--model", default=None, help="the same as FILE: a named model or a file")
