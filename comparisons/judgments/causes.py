@@ -23,16 +23,18 @@ Causes that need the engine's own values (a non-symmetric M, the forward solve) 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from typing import Callable, Mapping
 
 import numpy as np
 
 from reference_model import COORDINATES, TORQUE_NAMES, Model, ParameterError
-from reference_model.params import BODY_NAMES, PARAMETER_NAMES
+from reference_model.params import BODY_NAMES, PARAMETER_NAMES, ParameterWarning
 
 __all__ = [
-    "KINDS", "Cause", "body_angular_jacobians", "coordinate_swap_causes", "parameter_term_causes",
+    "KINDS", "Cause", "body_angular_jacobians", "changed_terms", "coordinate_swap_causes",
+    "parameter_evaluator", "parameter_term_causes",
     "table1_causes", "table1_of", "term_sign_causes", "torque_causes",
 ]
 
@@ -58,6 +60,10 @@ class Cause:
     unit: str = ""            # of the fitted coefficient (continuous causes)
     value: float | str | None = None  # the model's value of the quantity (continuous causes)
     engine: str | None = None  # a cause seen in one engine's own values only
+    #: continuous causes: coefficient -> the whole effect at that size (the model rebuilt with
+    #: the value changed), None when that value is not a valid model
+    evaluate: Callable[[float], Mapping[Key, np.ndarray] | None] | None = \
+        field(default=None, compare=False, repr=False)
 
     def effect(self, term: str, source: str) -> np.ndarray | None:
         """The effect on the block of ``term`` taken from ``source`` (None: none)."""
@@ -67,9 +73,34 @@ class Cause:
 
 # -- a parameter wrong in one term only --------------------------------------------------------
 
+def changed_terms(model: Model, states, model_terms: Callable, terms, **changes
+                  ) -> Mapping[Key, np.ndarray] | None:
+    """The change of the terms when the model's parameters take ``changes`` (None when that is
+    not a valid parameter set; the triangle inequality is not insisted on)."""
+    try:
+        with warnings.catch_warnings():     # a candidate value may well be unusual
+            warnings.simplefilter("ignore", ParameterWarning)
+            other = model.with_params(model.params.replace(**changes, triangle="warn"))
+    except (ParameterError, ValueError):
+        return None
+    new, base = model_terms(other, states), model_terms(model, states)
+    return {(t, None): new[t] - base[t] for t in terms}
+
+
+def parameter_evaluator(model: Model, states, model_terms: Callable, terms, name: str,
+                        only: str | None = None) -> Callable[[float], Mapping[Key, np.ndarray] | None]:
+    """`Cause.evaluate` of parameter ``name`` (in every term, or in term ``only``)."""
+    value = float(getattr(model.params, name))
+
+    def evaluate(x: float):
+        return changed_terms(model, states, model_terms, terms if only is None else [only],
+                             **{name: value + x})
+    return evaluate
+
+
 def parameter_term_causes(effects: Mapping[str, Mapping[str, np.ndarray]], model: Model,
-                          units: Mapping[str, str], bodies: Callable[[str], int | None]
-                          ) -> list[Cause]:
+                          units: Mapping[str, str], bodies: Callable[[str], int | None],
+                          states=None, model_terms: Callable | None = None) -> list[Cause]:
     """'p differs in term t only' for each parameter p whose effect reaches more than one term
     (where it reaches one, this is the parameter itself): e.g. D and dD dq built with
     different wheel radii, or a mass typed wrong in the gravity alone."""
@@ -84,7 +115,9 @@ def parameter_term_causes(effects: Mapping[str, Mapping[str, np.ndarray]], model
             out.append(Cause(f"{name}@{t}", f"{name} in {t} only", bodies(name),
                              "term-parameter", False,
                              {(t, None): effects[name][t]}, units[name],
-                             float(getattr(model.params, name))))
+                             float(getattr(model.params, name)),
+                             evaluate=None if model_terms is None else
+                             parameter_evaluator(model, states, model_terms, [t], name, t)))
     return out
 
 
@@ -274,9 +307,12 @@ def table1_causes(model: Model, states, model_terms: Callable, terms) -> list[Ca
 
     def built(**change) -> Model | None:
         try:
-            conv = parameters_from_benchmark({**base_values, **change}, allow_triangle_violation=True)
-            p = model.params.replace(**{n: getattr(conv, n) for n in PARAMETER_NAMES},
-                                     triangle="warn")
+            with warnings.catch_warnings():     # a slip's values may well be unusual
+                warnings.simplefilter("ignore", ParameterWarning)
+                conv = parameters_from_benchmark({**base_values, **change},
+                                                 allow_triangle_violation=True)
+                p = model.params.replace(**{n: getattr(conv, n) for n in PARAMETER_NAMES},
+                                         triangle="warn")
             return model.with_params(p)
         except (ParameterError, ValueError):
             return None
@@ -297,12 +333,18 @@ def table1_causes(model: Model, states, model_terms: Callable, terms) -> list[Ca
                          f"({BENCHMARK_DESCRIPTIONS[name].split(',')[0].split(' (')[0]})",
                          _table1_body(name),
                          "table1", False, {(t, None): (a[t] - b[t]) / width for t in terms},
-                         unit, value))
+                         unit, value, evaluate=lambda x, n=name, v=value: _slipped(
+                             built(**{n: v + x}), states, model_terms, base, terms)))
     for cid, label, name, slip in _T1_SLIPS:
-        other = built(**{name: slip(base_values[name])})
-        if other is None:
-            continue
-        changed = model_terms(other, states)
-        out.append(Cause(cid, label, None, "structural", True,
-                         {(t, None): changed[t] - base[t] for t in terms}))
+        changed = _slipped(built(**{name: slip(base_values[name])}), states, model_terms, base,
+                           terms)
+        if changed is not None:
+            out.append(Cause(cid, label, None, "structural", True, changed))
     return out
+
+
+def _slipped(other: Model | None, states, model_terms: Callable, base, terms):
+    if other is None:
+        return None
+    new = model_terms(other, states)
+    return {(t, None): new[t] - base[t] for t in terms}

@@ -58,6 +58,7 @@ Command line: ``bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchi
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -71,8 +72,8 @@ from reference_model import COORDINATES, Model, ParameterError
 from reference_model.params import (BODY_NAMES, CONTACT_MODELS, PARAMETER_NAMES, PARAMETER_UNITS,
                                     resolve_model)
 
-from .causes import (KINDS, Cause, coordinate_swap_causes, parameter_term_causes, table1_causes,
-                     term_sign_causes, torque_causes)
+from .causes import (KINDS, Cause, coordinate_swap_causes, parameter_evaluator,
+                     parameter_term_causes, table1_causes, term_sign_causes, torque_causes)
 from .terms import States, TermComparison, compare_terms, entry_name, random_states
 from .tolerances import Tolerance, load_tolerances
 
@@ -451,9 +452,12 @@ def _model_causes(model: Model, states: States, ref: Mapping[str, np.ndarray],
     effects = cause_effects(model, states, terms)
     out = [Cause(c, cause_label(c), cause_body(c), "structural" if c in STRUCTURAL else "parameter",
                  False, {(t, None): e for t, e in eff.items()},
-                 PARAMETER_UNITS.get(c, ""), _value(model, c))
+                 PARAMETER_UNITS.get(c, ""), _value(model, c),
+                 evaluate=None if c in STRUCTURAL else
+                 parameter_evaluator(model, states, model_terms, terms, c))
            for c, eff in effects.items()]
-    out += parameter_term_causes(effects, model, PARAMETER_UNITS, parameter_body)
+    out += parameter_term_causes(effects, model, PARAMETER_UNITS, parameter_body, states,
+                                 model_terms)
     out += term_sign_causes(ref, sources)
     if "S" in terms:
         out += torque_causes(ref["S"], states.q)
@@ -617,6 +621,8 @@ def _effect_vector(cause: Cause, blocks: Sequence[Block]) -> np.ndarray:
 #: two shares closer than this are a tie, settled by `KINDS` (e.g. 'sign of Qgrav flipped'
 #: and g = -9.81 explain the same difference; the discrete mistake is the likelier)
 _TIE = 1e-6
+#: how many of the best fitted causes are checked at their fitted size
+_VERIFIED = 8
 
 
 def explain(model: Model, states: States, ref: Mapping[str, np.ndarray],
@@ -659,6 +665,16 @@ def explain(model: Model, states: States, ref: Mapping[str, np.ndarray],
         i = min(range(len(causes)), key=lambda i: (-round(float(own[i]), 6), rank[i]))
         if own[i] > 0.0:
             per_term.append((label, causes[i].label, float(own[i])))
+    # the best fitted causes again at their fitted size: the model rebuilt with the value
+    # changed (a sensitivity is a linearization, and the value may not even be valid)
+    removed = {}
+    for i in [i for i in np.argsort(-share) if not fixed[i] and causes[i].evaluate][:_VERIFIED]:
+        if share[i] < 0.5 * LOCALIZED:
+            break
+        at = causes[i].evaluate(float(coef[i]))
+        removed[i] = _effect_vector(dataclasses.replace(causes[i], effects=at), blocks) \
+            if at is not None else None
+        share[i], worst[i] = _removal(r, removed[i], segments)
     whole = [i for i in range(len(causes)) if share[i] >= LOCALIZED and worst[i] >= LOCALIZED]
     pool = whole or range(len(causes))
     top = max(share[i] for i in pool)
@@ -666,13 +682,12 @@ def explain(model: Model, states: States, ref: Mapping[str, np.ndarray],
     order = sorted(range(len(causes)), key=lambda i: (i != best, -share[i], rank[i]))
 
     def missed(coefs, idx):
-        out = []
-        for (lo, hi), label in segments:
-            rb = r[lo:hi]
-            left = rb - S[lo:hi, list(idx)] @ np.asarray(coefs)
-            if float(left @ left) > (1.0 - LOCALIZED) * float(rb @ rb):
-                out.append(label)
-        return tuple(dict.fromkeys(out))
+        vec = removed.get(idx[0]) if len(idx) == 1 and idx[0] in removed else \
+            S[:, list(idx)] @ np.asarray(coefs)
+        if vec is None:
+            return tuple(label for _, label in segments)
+        return tuple(dict.fromkeys(label for (lo, hi), label in segments
+                                   if not _removal(r[lo:hi], vec[lo:hi], [])[0] >= LOCALIZED))
 
     seen, listed = set(), []
     for i in order:
@@ -721,6 +736,19 @@ def _share(coef, b, G, rr, ok, clip=True):
         out = (2.0 * coef * b - coef ** 2 * G) / rr
     out = np.where(ok & np.isfinite(out), out, 0.0 if clip else -np.inf)
     return np.clip(out, 0.0, 1.0) if clip else out
+
+
+def _removal(r: np.ndarray, removed: np.ndarray | None, segments) -> tuple[float, float]:
+    """(share of ``|r|^2`` that subtracting ``removed`` removes, the least such share over the
+    differing blocks' ``segments``); (0, -inf) when there is nothing to subtract (the cause's
+    value is not a valid parameter set)."""
+    if removed is None:
+        return 0.0, -np.inf
+    left = r - removed
+    whole = 1.0 - float(left @ left) / float(r @ r)
+    parts = [1.0 - float(left[lo:hi] @ left[lo:hi]) / float(r[lo:hi] @ r[lo:hi])
+             for (lo, hi), _ in segments]
+    return max(0.0, min(whole, 1.0)), min(parts, default=1.0)
 
 
 def _segments(blocks: Sequence[Block]) -> list[tuple[tuple[int, int], str]]:
