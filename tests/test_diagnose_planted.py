@@ -162,3 +162,12 @@ def test_command_line_names_the_cause_or_says_it_cannot(capsys):
     assert "localized:" not in out
     assert "no single cause explains it: Qgrav, Qaero differ(s) at Qaero[" in out
     assert "term by term (more than one mistake?): " in out and "sign of Qaero flipped" in out
+
+
+def test_a_fitted_value_that_is_no_model_explains_nothing(diagnosed):
+    """Gravity's sign flipped points exactly along d/dg, at g = -9.81: no valid bicycle (g > 0),
+    so g must not be offered as explaining any of it; the flipped sign explains all of it."""
+    from planted.engines import GravitySign
+    e = diagnosed[GravitySign].explanation
+    assert e.causes == ("sign:Qgrav",) and e.explained == pytest.approx(1.0, abs=1e-12)
+    assert "g" not in [c for c, *_ in e.candidates]
