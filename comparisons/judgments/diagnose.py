@@ -546,8 +546,8 @@ class Explanation:
                              "the engines lack the gyroscopic terms the model under test has")
                 parts[-1] += f" (coefficient {est:.3f})"
             elif kind == "structural":
-                parts.append("undoing it in the model's terms removes that share (taken at full "
-                             "size, no fitted coefficient)")
+                parts.append("undoing it removes that share (the whole mistake, no fitted "
+                             "size)")
             elif kind == "term-parameter":
                 name, term = cause.split("@")
                 parts.append(f"d{name} = {est:+.5g} {unit} in {term} only (model {value:.6g}, "
@@ -565,7 +565,7 @@ class Explanation:
                 f"explains {100 * self.explained:.2f}% of the difference: {'; '.join(parts)}")
         if len(self.causes) == 2 and _looks_swapped(self):
             text += f"; looks like {self.causes[0]} and {self.causes[1]} swapped"
-        if self.runner_up:
+        if self.runner_up and self.runner_up[1] >= 0.005:   # a runner-up of nothing says nothing
             label = next((c[1] for c in self.candidates if c[0] == self.runner_up[0]),
                          cause_label(self.runner_up[0]))
             text += f"; next best single cause {label} ({100 * self.runner_up[1]:.1f}%)"
