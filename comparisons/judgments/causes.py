@@ -123,7 +123,17 @@ def parameter_term_causes(effects: Mapping[str, Mapping[str, np.ndarray]], model
 
 # -- a term's sign flipped or the term missing -------------------------------------------------
 
-_SOURCES = {"": "", "F": " in generalized_forces"}
+#: where a copy of a term comes from -> how a mistake there is named
+_OWN = {"Qgrav": "gravity()", "Qv": "inverse_dynamics()"}
+
+
+def _where(term: str, source: str | None) -> tuple[str, str]:
+    """(id suffix, label suffix) of a mistake in one copy of a term (None: in every copy)."""
+    if source is None:
+        return "", ""
+    if source == "F":
+        return "[F]", " in generalized_forces"
+    return f"[{source or 'own'}]", f" in the engine's own {_OWN.get(term, term)}"
 
 
 def term_sign_causes(ref: Mapping[str, np.ndarray], sources: Mapping[str, tuple[str, ...]]
@@ -133,21 +143,13 @@ def term_sign_causes(ref: Mapping[str, np.ndarray], sources: Mapping[str, tuple[
     one only. ``sources``: term -> the sources its blocks come from."""
     out = []
     for t, src in sources.items():
-        where = [None] + (list(src) if len(src) > 1 else [])
-        for s in where:
-            tail = "" if s is None else _SOURCES.get(s, f" in {s}")
-            if s == "":
-                tail = f" in the engine's own {_OWN.get(t, t)}"
-            key = (t, s)
-            sid = "" if s is None else f"[{s or 'own'}]"
+        for s in [None] + (list(src) if len(src) > 1 else []):
+            sid, tail = _where(t, s)
             out.append(Cause(f"sign:{t}{sid}", f"sign of {t} flipped{tail}", None, "structural",
-                             True, {key: -2.0 * ref[t]}))
+                             True, {(t, s): -2.0 * ref[t]}))
             out.append(Cause(f"missing:{t}{sid}", f"{t} missing{tail}", None, "structural", True,
-                             {key: -ref[t]}))
+                             {(t, s): -ref[t]}))
     return out
-
-
-_OWN = {"Qgrav": "gravity()", "Qv": "inverse_dynamics()"}
 
 
 # -- the rider torques: sign, columns swapped, wrong body --------------------------------------
