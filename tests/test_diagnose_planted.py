@@ -171,3 +171,18 @@ def test_a_fitted_value_that_is_no_model_explains_nothing(diagnosed):
     e = diagnosed[GravitySign].explanation
     assert e.causes == ("sign:Qgrav",) and e.explained == pytest.approx(1.0, abs=1e-12)
     assert "g" not in [c for c, *_ in e.candidates]
+
+
+def test_an_engine_that_cannot_represent_the_model_is_left_out_with_its_reason(capsys):
+    """Beside another engine it is 'not run on this model', and the verdict is the others'
+    (planted: an UnsupportedModel let through fails it); alone, its error is the answer."""
+    from engines import UnsupportedModel
+    args = _args("CannotRepresent")
+    args.engines = "pinocchio"
+    assert run_diagnose(args) == 0
+    out = capsys.readouterr().out
+    assert "engines: pinocchio; 4 states" in out
+    assert "not run on this model: " in out and "declared for the test" in out
+    assert "verdict: everything agrees" in out
+    with pytest.raises(UnsupportedModel, match="declared for the test"):
+        run_diagnose(_args("CannotRepresent"))

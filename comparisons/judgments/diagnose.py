@@ -869,6 +869,7 @@ class Diagnosis:
     localization: Localization
     declared: tuple[tuple[str, float | str, float | str], ...] = field(default=())
     # (name, model's value, against's value) for every parameter that differs between the two
+    not_run: tuple[tuple[str, str], ...] = ()   # (engine, reason): cannot represent this model
 
     @property
     def agrees(self) -> bool:
@@ -924,6 +925,8 @@ class Diagnosis:
                      for n, a, b in self.declared]
             more = f" and {len(shown) - 6} more (see --json)" if len(shown) > 6 else ""
             lines.append(f"your file differs from {self.against} in: " + "; ".join(shown[:6]) + more)
+        for name, reason in self.not_run:
+            lines.append(f"not run on this model: {name} ({reason})")
         lines.append(f"verdict: {'everything agrees' if self.agrees else 'DIFFERS'}")
         return "\n".join(lines)
 
@@ -941,6 +944,7 @@ class Diagnosis:
                             for c in loc.quantities],
             "explanation": loc.explanation.to_dict() if loc.explanation else None,
             "declared_differences": [list(d) for d in self.declared],
+            "not_run": [{"engine": e, "reason": r} for e, r in self.not_run],
         }
 
 
@@ -970,14 +974,32 @@ def diagnose(params_file: str | Path, against: str | Path | None = None,
     model = Model(resolve_model(params_file))
     against_engine = _engine_named(against)
     truth = model if against is None or against_engine else Model(resolve_model(against))
-    built = [load_engine(e, truth, **dict((options or {}).get(e, {}))) for e in engines]
+    built, not_run = _build(engines, truth, options)
+    engines = tuple(e for e in engines if e not in dict(not_run))
     states = random_states(n_states, seed=seed)
     if against_engine:   # the user's engine against another engine, same parameters
         other = load_engine(str(against), model)
         return Diagnosis(str(params_file), f"engine {against}", engines, n_states,
-                         localize(model, states, built, truth=other), ())
+                         localize(model, states, built, truth=other), (), not_run)
     return Diagnosis(str(params_file), None if against is None else str(against), engines,
-                     n_states, localize(model, states, built), _declared(model, truth))
+                     n_states, localize(model, states, built), _declared(model, truth), not_run)
+
+
+def _build(engines: Sequence[str], model: Model, options) -> tuple[list[Engine], tuple[tuple[str, str], ...]]:
+    """The engines built from ``model``, and (name, reason) of those that declare they cannot
+    represent it (`engines.UnsupportedModel`: e.g. MuJoCo and a measured inertia that breaks
+    A + B >= C), left out as a run leaves them out; when none can, the first one's error."""
+    from engines import UnsupportedModel
+    built, not_run, first = [], [], None
+    for e in engines:
+        try:
+            built.append(load_engine(e, model, **dict((options or {}).get(e, {}))))
+        except UnsupportedModel as exc:
+            not_run.append((e, str(exc)))
+            first = first or exc
+    if not built:
+        raise first
+    return built, tuple(not_run)
 
 
 def _engine_named(against) -> bool:

@@ -446,3 +446,15 @@ class TwoMistakes(GravitySignInForces, DragSign):
     explains it, and diagnose must say so."""
 
     name = "planted-two-mistakes"
+
+
+class CannotRepresent(PortedBicycle):
+    """A port that declares it cannot represent the model (as MuJoCo for an inertia that breaks
+    A + B >= C): diagnose leaves it out with the reason, as a run does."""
+
+    name = "planted-cannot-represent"
+
+    def __init__(self, model):
+        from engines import UnsupportedModel
+        raise UnsupportedModel(f"{self.name} cannot represent model {model.name!r}: declared "
+                               "for the test")
