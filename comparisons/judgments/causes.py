@@ -212,8 +212,8 @@ def torque_causes(S: np.ndarray, q: np.ndarray) -> list[Cause]:
             eff = np.zeros_like(S)
             eff[:, :, k] = col - S[:, :, k]
             out.append(Cause(f"body:S[{name}]->{b}",
-                             f"rider torque {name} applied to body {b} ({BODY_NAMES[b]}) instead "
-                             f"of body {body} ({BODY_NAMES[body]})", b, "structural", True,
+                             f"rider torque {name} applied to the {BODY_NAMES[b]} instead of "
+                             f"the {BODY_NAMES[body]}", b, "structural", True,
                              {("S", None): eff}))
     for i in range(3):
         for j in range(i + 1, 3):
