@@ -601,7 +601,9 @@ def localize(model: Model, states: States, engines: Sequence[Engine],
     gravity() and inverse_dynamics()) and its forward accelerations are checked against the
     solve of its own terms. ``truth``: another engine to compare with instead of the model (its
     terms are the baseline; the causes are still fitted on the model's sensitivities, which is
-    what an engine built from the same parameters shares)."""
+    what an engine built from the same parameters shares). ``shared``: the model's candidate
+    causes at these states (`ModelCauses`), kept across calls with the same model, states and
+    no ``truth``."""
     tols = load_tolerances()
     copies: dict[str, dict[str, np.ndarray]] = {}
     solves: dict[str, SolveValues | None] = {}
