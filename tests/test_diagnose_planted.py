@@ -186,3 +186,14 @@ def test_an_engine_that_cannot_represent_the_model_is_left_out_with_its_reason(c
     assert "verdict: everything agrees" in out
     with pytest.raises(UnsupportedModel, match="declared for the test"):
         run_diagnose(_args("CannotRepresent"))
+
+
+def test_a_near_cause_is_said_to_be_near():
+    """A mistake no candidate describes (a linear drag law) fits a smaller cv to 99.9 %, not to
+    round-off (a true cause leaves at most ~1e-8 of the difference); diagnose must say so."""
+    from planted.engines import LinearDrag
+    thesis = load_model("thesis")
+    loc = localize(thesis, random_states(N_STATES, seed=DEFAULT_SEED), [LinearDrag(thesis)])
+    e = loc.explanation
+    assert e.causes == ("cv",) and 1 - 1e-2 < e.explained < 1 - 1e-6
+    assert "a near cause, perhaps not the exact one" in e.describe()

@@ -458,3 +458,16 @@ class CannotRepresent(PortedBicycle):
         from engines import UnsupportedModel
         raise UnsupportedModel(f"{self.name} cannot represent model {model.name!r}: declared "
                                "for the test")
+
+
+class LinearDrag(_Applied):
+    """The drag as -cv v instead of -cv |v| v. No candidate is this mistake; at the states'
+    speeds (10 to 40 m/s at the frame) it is nearly a much smaller cv, which diagnose may name,
+    but it must say that the cause is near, not exact."""
+
+    name = "planted-linear-drag"
+
+    def _applied(self, s, T):
+        Jv3, _ = s.jacobians(3, s.com[3])
+        v3 = Jv3 @ s.dq
+        return super()._applied(s, T) + self.p.cv * (np.sqrt(v3 @ v3) - 1.0) * (Jv3.T @ v3)
