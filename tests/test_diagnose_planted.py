@@ -5,7 +5,8 @@ written wrong, the way a researcher porting the bicycle gets it wrong. What each
 localized to is worked out from what it does to the equations, not from diagnose's output:
 
 * a sign flipped or a term left out changes that term only, by ``-2 T`` or ``-T``; in
-  generalized_forces alone (gravity() right) it shows only in the copy of Qgrav taken out of F;
+  generalized_forces alone (gravity() right) it shows only in the copy of Qgrav taken out of F,
+  and M ddq's sign in inverse_dynamics alone only in the copy of M taken out of it;
 * a rider torque with the wrong sign or on the wrong body changes one column of S only, by
   ``-2 S_k`` or ``Jw_b^T a - S_k``;
 * M built with theta and gamma swapped is ``M(P q)``; M filled as its upper triangle differs
@@ -90,7 +91,7 @@ def test_planted_bug_is_named(diagnosed, engine):
 def test_controls_agree(diagnosed, engine):
     loc = diagnosed[engine]
     assert loc.agrees and loc.explanation is None and loc.describe() == "everything agrees"
-    assert {c.source for c in loc.checks} == {"", "F"} and len(loc.solve_checks) == 1
+    assert {c.source for c in loc.checks} == {"", "F", "ID"} and len(loc.solve_checks) == 1
 
 
 def test_two_mistakes_are_no_single_cause(diagnosed):

@@ -133,6 +133,8 @@ def _where(term: str, source: str | None) -> tuple[str, str]:
         return "", ""
     if source == "F":
         return "[F]", " in generalized_forces"
+    if source == "ID":
+        return "[ID]", " in inverse_dynamics"
     return f"[{source or 'own'}]", f" in the engine's own {_OWN.get(term, term)}"
 
 

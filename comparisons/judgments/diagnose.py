@@ -247,14 +247,15 @@ def candidate_causes(model: Model, states: States, ref: Mapping[str, np.ndarray]
     terms = [t for t in TERMS if any(b.term == t for b in blocks)]
     sources = {t: tuple(dict.fromkeys(b.source for b in blocks if b.term == t)) for t in terms}
     out = list((shared or ModelCauses(model, states)).get(ref, terms, sources))
+    for name in dict.fromkeys(b.engine for b in blocks):
+        Ms = [b for b in blocks if b.engine == name and b.term == "M"]   # its M, in ID too
+        for part, lower in (("upper", True), ("lower", False)) if Ms else ():
+            out.append(Cause(f"triangle:M:{part}", f"M not symmetric: its "
+                             f"{'lower' if lower else 'upper'} triangle is wrong (M with its "
+                             f"{part} triangle mirrored agrees)", None, "structural", True,
+                             {("M", b.source): b.value - _mirrored(b.value, lower) for b in Ms},
+                             engine=name))
     for b in blocks:
-        if b.term == "M" and b.source == "":
-            for part, lower in (("upper", True), ("lower", False)):
-                mirrored = _mirrored(b.value, lower)
-                out.append(Cause(f"triangle:M:{part}", f"M not symmetric: its "
-                                 f"{'lower' if lower else 'upper'} triangle is wrong (M with its "
-                                 f"{part} triangle mirrored agrees)", None,
-                                 "structural", True, {("M", ""): b.value - mirrored}, engine=b.engine))
         if b.term == "ddq":
             sv = solves[b.engine]
             out.append(Cause("solve:unconstrained", "forward_acceleration solves M ddq = F without "
@@ -669,6 +670,9 @@ class Diagnosis:
         if "F" in rows:
             lines.append("  'in F': the term taken out of generalized_forces (F = Qv + Qgrav + Qaero "
                          "+ S T), the other row from gravity() / inverse_dynamics()")
+        if "ID" in rows:
+            lines.append("  'M in ID': M taken out of inverse_dynamics (column k: ID(q, 0, e_k) - "
+                         "ID(q, 0, 0)), the other row from mass_matrix()")
         if "solve" in rows:
             lines.append("  'ddq solve': forward_acceleration against the constrained solve of the "
                          "engine's own M, F, D and dD dq")

@@ -25,7 +25,7 @@ from .terms import States, entry_name
 from .tolerances import Tolerance, load_tolerances
 
 __all__ = [
-    "SOLVE_NEEDS", "SOURCE_LABEL", "TERMS", "TERM_TOLERANCE", "Block", "SolveValues",
+    "COPY_SOURCE", "SOLVE_NEEDS", "SOURCE_LABEL", "TERMS", "TERM_TOLERANCE", "Block", "SolveValues",
     "TermCheck", "check_block", "check_terms", "engine_terms", "extract", "model_terms",
     "solve_values", "term_blocks",
 ]
@@ -56,7 +56,8 @@ def extract(engine: Engine, states: States, extras: bool
              ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], "SolveValues | None"]:
     """(terms, copies, solve): the terms as `engine_terms` gives them; with ``extras``, the
     copies of Qgrav and Qv taken out of ``generalized_forces`` where the terms came from
-    gravity() and inverse_dynamics(), and the engine's forward solve against its own terms."""
+    gravity() and inverse_dynamics(), of M out of inverse_dynamics (`COPY_SOURCE`), and the
+    engine's forward solve against its own terms."""
     q, dq = states.q, states.dq
     n = len(states)
     zero3 = np.zeros((n, 3))
@@ -91,6 +92,12 @@ def extract(engine: Engine, states: States, extras: bool
             T[:, k] = 1.0
             cols.append(np.asarray(engine.generalized_forces(q, np.zeros_like(dq), T)) - rest)
         out["S"] = np.stack(cols, axis=-1)
+    if extras and has("inverse_dynamics"):   # M again, column k = ID(q, 0, e_k) - ID(q, 0, 0)
+        zero = np.zeros_like(dq)
+        at_rest = np.asarray(engine.inverse_dynamics(q, zero, zero), dtype=float)
+        copies["M"] = np.stack([np.asarray(engine.inverse_dynamics(q, zero, np.eye(len(zero[0]))[k]
+                                                                   + zero), dtype=float) - at_rest
+                                for k in range(zero.shape[1])], axis=-1)
     if has("constraint_jacobian"):
         out["D"] = np.asarray(engine.constraint_jacobian(q), dtype=float)
     if has("constraint_bias"):
@@ -157,7 +164,9 @@ def _scales(term: str, ref: Mapping[str, np.ndarray], tol: Tolerance) -> np.ndar
 
 
 #: a block's source -> how the term table names it
-SOURCE_LABEL = {"": "", "F": " in F", "solve": " solve"}
+SOURCE_LABEL = {"": "", "F": " in F", "ID": " in ID", "solve": " solve"}
+#: a term's second copy -> where it is taken from: generalized_forces ('F') or inverse_dynamics
+COPY_SOURCE = {"Qgrav": "F", "Qv": "F", "M": "ID"}
 
 
 @dataclass(frozen=True)
@@ -196,7 +205,7 @@ def term_blocks(ref: Mapping[str, np.ndarray], engine_values: Mapping[str, Mappi
             out.append(Block(name, term, "", E, ref[term], scale[term],
                              tols[TERM_TOLERANCE[term][0]].tolerance))
         for term, E in (copies or {}).get(name, {}).items():
-            out.append(Block(name, term, "F", E, ref[term], scale[term],
+            out.append(Block(name, term, COPY_SOURCE[term], E, ref[term], scale[term],
                              tols[TERM_TOLERANCE[term][0]].tolerance))
         solve = (solves or {}).get(name)
         if solve is not None:

@@ -315,6 +315,19 @@ class UnconstrainedSolve(PortedBicycle):
         return np.linalg.solve(self._M(q, s), self._F(s, T)), C
 
 
+class InverseDynamicsSign(PortedBicycle):
+    """inverse_dynamics returns -M ddq - Qv - Qgrav: the inertial term's sign flipped there
+    alone (mass_matrix and the forward solve are right)."""
+
+    name = "planted-inverse-dynamics-sign"
+
+    def inverse_dynamics(self, q, dq, ddq):
+        def one(q, dq, ddq):
+            s = _State(self, q, dq)
+            return -self._M(q, s) @ ddq - self._Qv(s) - self._Qgrav(s)
+        return self._each(one, q, dq, ddq)
+
+
 # -- the parameters ---------------------------------------------------------------------------
 
 class _Typo(PortedBicycle):
@@ -426,6 +439,7 @@ PLANTED = {
     MassMatrixSwapped: ("thesis", ("swap:M:theta,gamma",), ("M",)),
     MassMatrixUpper: ("thesis", ("triangle:M:upper",), ("M",)),
     UnconstrainedSolve: ("thesis", ("solve:unconstrained",), ("ddq",)),
+    InverseDynamicsSign: ("thesis", ("sign:M[ID]",), ("M",)),
     FrameProductSign: ("thesis", ("I3xz",), ("M", "Qv")),
     WheelInertiasSwapped: ("thesis", ("I2xx", "I2yy"), ("M", "Qv")),
     StandardGravity: ("thesis", ("g",), ("Qgrav",)),
