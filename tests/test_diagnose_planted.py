@@ -27,7 +27,7 @@ Cost: every planted engine and the two controls are diagnosed once per module (t
 below) at 8 states: each mistake changes its term at every state with a rate or a torque in it,
 and 8 states x ~180 entries per engine leave a chance alignment of a wrong cause far below the
 90 % a localization needs (every mistake is named with a share above 99.9 % at 8, 12 and 24
-states alike). The model's candidate causes are built once per model (`ModelCauses`). About 5 s
+states alike). The model's candidate causes are built once per model (`ModelCauses`). About 7 s
 of CPU for the module.
 """
 
