@@ -2,8 +2,9 @@
 
 `run_tasks` runs calls in worker processes forked from this one and returns their results
 keyed as given; `call_in_worker` runs one call in a worker and returns its value or raises its
-exception, so that a long call stays stoppable (Exudyn's solver, in C++, swallows the
-exception a signal raises in its Python callbacks; a worker is simply killed). The calls are
+exception, so that a long call stays stoppable (Exudyn's solver, in C++, catches the
+exception a signal raises in its Python callbacks and runs on or fails with its own error; a
+worker is simply killed). The calls are
 not pickled (the workers are forks, they know them); results come back through one pipe per
 worker, and a worker that dies fails only its own call. Workers start as `signals.child_init`
 says: SIGTERM ends them, SIGINT is the main process's to decide, and they die with their
