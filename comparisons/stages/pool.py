@@ -96,6 +96,7 @@ def _serve(conn: Connection, calls: list[tuple[Callable, tuple]]) -> None:
             except Exception:      # noqa: BLE001 - the text is enough
                 raised = None
             reply = _Reply(k, error=f"{type(exc).__name__}: {exc}", exception=raised)
+        flush_streams()     # what the call printed: the worker ends by SIGKILL, unflushed
         try:
             conn.send(reply)
         except Exception as exc:   # noqa: BLE001 - the value does not pickle
