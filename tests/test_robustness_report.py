@@ -1,14 +1,12 @@
 """The report folder under damage, interruption and hostile environments (issue: nothing lost,
 nothing crashes, nothing silently wrong). Runs are the smallest that write a whole report
-(the reference on the check scenario), in subprocesses where a signal is sent.
+(the reference on the check scenario); signals: tests/test_shutdown.py.
 """
 
 import json
 import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -50,33 +48,6 @@ def test_a_failed_stage_leaves_the_old_report_as_it_was(tmp_path):
             raise RuntimeError("killed half way")
     assert (out / "summary.json").read_text() == '{"passed": true}\n'
     assert [p.name for p in tmp_path.iterdir()] == ["r"]      # no staging folder left
-
-
-def test_sigterm_during_the_runs_ends_the_workers_and_keeps_the_old_report(tmp_path):
-    """SIGTERM to the main process while its workers compute: exit promptly, no worker left
-    alive, the previous complete report untouched, no partial folder left."""
-    out = tmp_path / "r"
-    assert main([*TINY, "--out", str(out)]) == 0
-    before = (out / "summary.json").read_text()
-    proc = _cli("run", "--quick", "--scenarios", "check,stability-psid10", "--sections", "none",
-                "--jobs", "2", "--out", str(out))
-    workers = []
-    deadline = time.time() + 120
-    while time.time() < deadline and len(workers) < 2:        # wait for the pool to start
-        time.sleep(0.2)
-        kids = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True)
-        workers = [int(p) for p in kids.stdout.split()]
-    assert workers, "the pool never started"
-    proc.send_signal(signal.SIGTERM)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 143, err[-500:]          # 128 + SIGTERM, after cleaning up
-    assert "terminated; nothing written" in err.strip().splitlines()[-1]
-    time.sleep(1.0)
-    alive = [w for w in workers if Path(f"/proc/{w}").exists()
-             and "zombie" not in Path(f"/proc/{w}/status").read_text().lower()]
-    assert not alive, f"workers {alive} outlived the main process"
-    assert (out / "summary.json").read_text() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]
 
 
 def test_report_is_utf8_whatever_the_locale(tmp_path):

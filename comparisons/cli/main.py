@@ -113,7 +113,8 @@ def cmd_simulate(args) -> int:
         settings.update(constraints=args.constraints, rtol=args.rtol, atol=args.atol)
     taken, ignored = split_options(engine.simulate, settings)
     ignored = {k: v for k, v in ignored.items() if v is not None}
-    traj = engine.simulate(sc, **taken)
+    from ..stages.pool import call_in_worker
+    traj = call_in_worker(engine.simulate, sc, **taken)   # a worker: stoppable even in C++
     write_csv(frames.simulation_frame(traj), args.out)
     how = ", ".join(f"{k}: {v}" for k, v in traj.settings.items()
                     if k in ("constraints", "build", "step", "solver") and v is not None)
@@ -361,17 +362,17 @@ def main(argv: list[str] | None = None) -> int:
     from reference_model.codegen import CodegenError
     from reference_model.solvers import ConstraintSolveError
 
-    import signal
     import warnings
 
     def _one_line_warning(message, category, filename, lineno, file=None, line=None):
         print(f"bicycle-xval: warning: {message}", file=sys.stderr)
     show = warnings.showwarning
 
-    from ..stages.pool import raise_terminated
-    previous = signal.getsignal(signal.SIGTERM)
-    if previous in (signal.SIG_DFL, None):   # SIGTERM unwinds like Ctrl-C: staging folders go
-        signal.signal(signal.SIGTERM, raise_terminated)
+    from ..stages.signals import Terminated, exit_at_once, install_handlers, restore_handlers
+    as_program = argv is None
+    # SIGTERM and Ctrl-C unwind like an exception (staging folders go, workers are killed); a
+    # second one during the unwind ends the process at once
+    previous = install_handlers("bicycle-xval")
     warnings.showwarning = _one_line_warning   # a ParameterWarning is one line, like an error
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
@@ -387,13 +388,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bicycle-xval: error: {exc.strerror or exc}: {exc.filename or ''}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt as exc:
-        from ..stages.pool import Terminated
         what = "terminated" if isinstance(exc, Terminated) else "interrupted"
         print(f"bicycle-xval: {what}; nothing written (an existing report is as it was)",
               file=sys.stderr)
-        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+        code = EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+        if as_program:   # workers reaped, staging removed: skip the interpreter's shutdown
+            exit_at_once(code)
+        return code
     finally:
-        signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+        restore_handlers(previous)
         warnings.showwarning = show
 
 

@@ -1,20 +1,35 @@
-"""Independent stages in worker processes, longest first, ended with the main process.
+"""Independent calls in forked worker processes, longest first, ended with the main process.
 
-`run_tasks` runs picklable top-level calls in a `ProcessPoolExecutor` and returns their results
-keyed as given. Workers ignore SIGINT (the main process decides) and, on Linux, ask the kernel
-to end them when their parent dies (``PR_SET_PDEATHSIG``), so a killed run never leaves
-workers behind. On SIGTERM or Ctrl-C the main process cancels what has not started, terminates
-the workers and re-raises, so the caller can leave the output folder as it was.
+`run_tasks` runs calls in worker processes forked from this one and returns their results
+keyed as given; `call_in_worker` runs one call in a worker and returns its value or raises its
+exception, so that a long call stays stoppable (Exudyn's solver, in C++, catches the
+exception a signal raises in its Python callbacks and runs on or fails with its own error; a
+worker is simply killed). The calls are
+not pickled (the workers are forks, they know them); results come back through one pipe per
+worker, and a worker that dies fails only its own call. Workers start as `signals.child_init`
+says: SIGTERM ends them, SIGINT is the main process's to decide, and they die with their
+parent however it ends. On SIGTERM or Ctrl-C the main process kills its workers (SIGKILL),
+reaps them and re-raises, so the caller can leave the output folder as it was. The pool has no
+threads, so nothing is left to join when the process exits.
 """
 
 from __future__ import annotations
 
 import os
+import pickle
 import signal
 import time
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
+from functools import partial
+from multiprocessing.connection import Connection, Pipe, wait
 from typing import Any, Callable, Hashable
+
+from .signals import (Terminated, blocked, child_init, flush_streams, raise_terminated,
+                      terminating)
+
+__all__ = ["MAX_WORKERS", "WARM_IMPORTS", "Task", "TaskResult", "Terminated", "call_in_worker",
+           "default_workers", "raise_terminated", "run_tasks", "warm_imports"]
 
 MAX_WORKERS = 8
 #: imported once in the main process before the stages' workers fork, so each worker does not
@@ -52,28 +67,107 @@ class TaskResult:
     error: str | None = None
 
 
-def _worker_init() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:   # Linux: die with the parent (PR_SET_PDEATHSIG = 1)
-        import ctypes
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)
-    except (OSError, AttributeError):
-        pass
+@dataclass(frozen=True)
+class _Reply:
+    """What a worker sends back for call ``index``: its value, or its error as text and (when
+    it pickles) the exception itself."""
+
+    index: int
+    value: Any = None
+    seconds: float = 0.0
+    error: str | None = None
+    exception: bytes | None = None
 
 
-def _timed(func, args):
-    t0 = time.perf_counter()
-    return func(*args), time.perf_counter() - t0
+def _serve(conn: Connection, calls: list[tuple[Callable, tuple]]) -> None:
+    """A worker's loop: the index of a call in, its `_Reply` out, until the pipe closes."""
+    while True:
+        try:
+            k = conn.recv()
+        except EOFError:
+            return
+        func, args = calls[k]
+        t0 = time.perf_counter()
+        try:
+            reply = _Reply(k, func(*args), time.perf_counter() - t0)
+        except Exception as exc:   # a broken call is reported, the others go on
+            try:
+                raised = pickle.dumps(exc)
+            except Exception:      # noqa: BLE001 - the text is enough
+                raised = None
+            reply = _Reply(k, error=f"{type(exc).__name__}: {exc}", exception=raised)
+        flush_streams()     # what the call printed: the worker ends by SIGKILL, unflushed
+        try:
+            conn.send(reply)
+        except Exception as exc:   # noqa: BLE001 - the value does not pickle
+            conn.send(_Reply(k, error=f"its result could not be sent back "
+                                      f"({type(exc).__name__}: {exc})"))
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM reached the main process: an interruption like Ctrl-C (never caught by an
-    ``except Exception``), so every ``finally`` and context manager on the way out runs."""
+@dataclass
+class _Workers:
+    """Forked workers, each with its own pipe; `close` kills and reaps them all."""
+
+    calls: list[tuple[Callable, tuple]]
+    busy: dict[Connection, int] = field(default_factory=dict)     # pipe -> call index
+    pids: dict[Connection, int] = field(default_factory=dict)     # pipe -> worker pid
+
+    def fork(self) -> Connection:
+        parent = os.getpid()
+        mine, theirs = Pipe()
+        flush_streams()
+        with blocked():
+            pid = os.fork()
+            if pid == 0:   # the worker: never returns into the caller's code
+                code = 1
+                try:
+                    for conn in (mine, *self.pids):
+                        conn.close()
+                    child_init(parent)
+                    _serve(theirs, self.calls)
+                    code = 0
+                finally:
+                    os._exit(code)
+            theirs.close()
+            self.pids[mine] = pid
+        return mine
+
+    def give(self, conn: Connection, k: int) -> None:
+        conn.send(k)
+        self.busy[conn] = k
+
+    def reply(self) -> tuple[_Reply, Connection | None]:
+        """The next reply, and the pipe of the worker that is now free (None: it died)."""
+        conn = wait(list(self.busy))[0]
+        k = self.busy.pop(conn)
+        try:
+            return conn.recv(), conn
+        except (EOFError, OSError):
+            status = self._end(conn)
+            return _Reply(k, error=f"its worker process died ({_how(status)})"), None
+
+    def _end(self, conn: Connection) -> int:
+        pid = self.pids.pop(conn)
+        self.busy.pop(conn, None)
+        with blocked():
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            status = os.waitpid(pid, 0)[1]
+            conn.close()
+        return status
+
+    def close(self) -> None:
+        with blocked():   # a second signal cannot leave a worker behind
+            for conn in list(self.pids):
+                self._end(conn)
 
 
-def raise_terminated(signum, frame):
-    """A SIGTERM handler: turn the signal into `Terminated`."""
-    raise Terminated("terminated (SIGTERM)")
+def _how(status: int) -> str:
+    if os.WIFSIGNALED(status):
+        return f"killed by {signal.Signals(os.WTERMSIG(status)).name}"
+    return f"exit status {os.WEXITSTATUS(status)}"
 
 
 def default_workers(n_tasks: int) -> int:
@@ -84,57 +178,53 @@ def default_workers(n_tasks: int) -> int:
 def run_tasks(tasks: list[Task], workers: int | None = None,
               progress: Callable[[str], None] = lambda s: None,
               warm: tuple[str, ...] = WARM_IMPORTS) -> dict[Hashable, TaskResult]:
-    """Run every task; a task that raises becomes a `TaskResult` with ``error`` set (the
-    exception's type and message), never an aborted run. ``warm``: modules imported in this
-    process before the workers fork (they inherit them)."""
+    """Run every task in worker processes; a task that raises (or whose worker dies) becomes a
+    `TaskResult` with ``error`` set (the exception's type and message), never an aborted run.
+    ``warm``: modules imported in this process before the workers fork (they inherit them)."""
     if not tasks:
         return {}
-    workers = min(workers or default_workers(len(tasks)), len(tasks))
     order = sorted(tasks, key=lambda t: -t.cost)
+    workers = min(workers or default_workers(len(order)), len(order))
     results: dict[Hashable, TaskResult] = {}
-    n = len(order)
-    if workers <= 1:
-        for k, task in enumerate(order, 1):
-            results[task.key] = _run_here(task)
-            progress(_line(k, n, task, results[task.key]))
-        return results
-    previous = signal.getsignal(signal.SIGTERM)
-    signal.signal(signal.SIGTERM, raise_terminated)
     warm_imports(warm)
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
-    try:
-        pending = {pool.submit(_timed, t.func, t.args): t for t in order}
-        done_count = 0
-        while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in done:
-                task = pending.pop(fut)
-                try:
-                    value, seconds = fut.result()
-                    results[task.key] = TaskResult(task.key, value, seconds)
-                except Exception as exc:   # a broken stage is reported, the others go on
-                    results[task.key] = TaskResult(task.key, None, 0.0,
-                                                   f"{type(exc).__name__}: {exc}")
-                done_count += 1
-                progress(_line(done_count, n, task, results[task.key]))
-    except BaseException:
-        for p in list(getattr(pool, "_processes", {}).values()):
-            p.terminate()
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    else:
-        pool.shutdown()
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+    queue = deque(range(len(order)))
+    pool = _Workers([(t.func, t.args) for t in order])
+    with terminating():
+        try:
+            for _ in range(workers):
+                pool.give(pool.fork(), queue.popleft())
+            while pool.busy:
+                reply, free = pool.reply()
+                task = order[reply.index]
+                results[task.key] = TaskResult(task.key, reply.value, reply.seconds, reply.error)
+                progress(_line(len(results), len(order), task, results[task.key]))
+                if queue:
+                    pool.give(free or pool.fork(), queue.popleft())
+        finally:
+            pool.close()
     return results
 
 
-def _run_here(task: Task) -> TaskResult:
+def call_in_worker(func: Callable[..., Any], *args, **kwargs) -> Any:
+    """``func(*args, **kwargs)`` in one worker process: its value, or its exception raised here
+    (a `RuntimeError` with its text when it does not pickle, or when the worker died)."""
+    pool = _Workers([(partial(func, *args, **kwargs), ())])
+    with terminating():
+        try:
+            pool.give(pool.fork(), 0)
+            reply, _ = pool.reply()
+        finally:
+            pool.close()
+    if reply.error is None:
+        return reply.value
+    raise _exception(reply)
+
+
+def _exception(reply: _Reply) -> BaseException:
     try:
-        value, seconds = _timed(task.func, task.args)
-        return TaskResult(task.key, value, seconds)
-    except Exception as exc:
-        return TaskResult(task.key, None, 0.0, f"{type(exc).__name__}: {exc}")
+        return pickle.loads(reply.exception) if reply.exception else RuntimeError(reply.error)
+    except Exception:   # noqa: BLE001 - an exception that does not unpickle: its text
+        return RuntimeError(reply.error)
 
 
 def _line(k: int, n: int, task: Task, r: TaskResult) -> str:
