@@ -17,7 +17,7 @@ $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 
 $(STAMP): pyproject.toml $(VENV)/bin/python
-	$(VENV)/bin/python -m pip install -e '.[test]'
+	$(VENV)/bin/python -m pip install -e '.[all,test]'
 	touch $(STAMP)
 
 test: $(STAMP)
@@ -47,7 +47,7 @@ MUTATION_STAMP = $(VENV)/.installed-mutation
 MUTANTS ?=
 
 $(MUTATION_STAMP): pyproject.toml $(VENV)/bin/python
-	$(VENV)/bin/python -m pip install -e '.[test,mutation]'
+	$(VENV)/bin/python -m pip install -e '.[all,test,mutation]'
 	touch $(MUTATION_STAMP)
 
 mutants: $(MUTATION_STAMP)

@@ -21,7 +21,7 @@ PIN_CHECK_RTOL = 1e-12
 # -- 6. Pinocchio ----------------------------------------------------------------------------
 
 def build_pinocchio(model):
-    """The Pinocchio tree of the engines' adapter (engines/pinocchio.py; its joint order is
+    """The Pinocchio tree of the engines' adapter (engines/pinocchio/engine.py; its joint order is
     asserted there and its terms are checked by tests/test_engine_conformance.py)."""
     from engines.pinocchio import build_pinocchio_model
     pm = build_pinocchio_model(model)

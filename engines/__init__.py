@@ -17,13 +17,13 @@ from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError,
                    EngineSpecError, EngineUsageError, UnsupportedModel)
 from .loading import (EngineInfo, LoadedEngines, engine_info, load_engine, load_engines,
                       parse_engine_options, split_options)
-from .registry import GROUP, available_engines
+from .registry import GROUP, EngineNotInstalled, available_engines, not_installed
 
 # The built-in engines' names (a constant kept for existing imports; what is installed and
 # registered right now, third parties' included, is `available_engines()`).
 ENGINES = ("reference", "pinocchio", "exudyn")
 
 __all__ = ["CAPABILITIES", "CONTACTS", "ENGINES", "GROUP", "CapabilityError", "Engine",
-           "EngineError", "EngineInfo", "EngineLoadError", "EngineSpecError", "EngineUsageError", "LoadedEngines",
-           "UnsupportedModel", "available_engines", "engine_info", "load_engine", "load_engines",
-           "parse_engine_options", "split_options"]
+           "EngineError", "EngineInfo", "EngineLoadError", "EngineNotInstalled", "EngineSpecError",
+           "EngineUsageError", "LoadedEngines", "UnsupportedModel", "available_engines", "engine_info",
+           "load_engine", "load_engines", "not_installed", "parse_engine_options", "split_options"]

@@ -19,7 +19,7 @@ from typing import Any, Mapping, NamedTuple, Sequence
 
 from .base import (CAPABILITIES, Engine, EngineError, EngineLoadError, EngineSpecError,
                    UnsupportedModel)
-from .registry import _one_line, _resolve_target, _who, registrations, resolve
+from .registry import EngineNotInstalled, _one_line, _resolve_target, _who, registrations, resolve
 
 
 @dataclass(frozen=True)
@@ -28,7 +28,8 @@ class EngineInfo:
 
     ``capabilities`` and ``contacts`` are the class's declarations (with default options);
     ``options`` the keyword arguments its ``__init__`` takes (``**`` means any); ``error`` is set
-    (and the rest empty) when the engine could not be imported."""
+    (and the rest empty) when the engine could not be imported, ``not_installed`` instead when
+    what it declares in ``REQUIRES`` is missing (the line with the pip command)."""
 
     name: str
     spec: str
@@ -38,6 +39,7 @@ class EngineInfo:
     options: tuple[str, ...] = ()
     doc: str = ""
     error: str | None = None
+    not_installed: str | None = None
 
 
 class LoadedEngines(NamedTuple):
@@ -244,6 +246,10 @@ def engine_info(spec: str | None = None) -> list[EngineInfo]:
     for reg in regs:
         try:
             cls, _, _ = _resolve_target(reg)
+        except EngineNotInstalled as exc:   # an extra not installed: not an error
+            out.append(EngineInfo(name=reg.name, spec=reg.target, source=reg.source,
+                                  not_installed=exc.reason))
+            continue
         except EngineError as exc:
             out.append(EngineInfo(name=reg.name, spec=reg.target, source=reg.source, error=str(exc)))
             continue

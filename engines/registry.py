@@ -17,6 +17,16 @@ this group (an editable install made before the group existed), the built-ins ar
 ``pyproject.toml`` beside the package, so ``reference``, ``pinocchio`` and ``exudyn`` are found
 either way and from the same single declaration. An installed entry point wins over that file.
 
+What an engine needs beyond bicycle-xval's core is declared in the module its entry point names
+(for a package, its ``__init__``), which must import without it::
+
+    REQUIRES = ("exudyn",)   # top-level modules, looked up with importlib.util.find_spec
+    EXTRA = "exudyn"         # the extra of the registering distribution that installs them
+
+When one of ``REQUIRES`` cannot be found, the engine is `EngineNotInstalled` ("not installed:
+pip install 'bicycle-xval[exudyn]'"): nothing heavy is imported to find that out, and no name
+of an engine is known here (docs/engines.md, "An engine's heavy dependency").
+
 Errors: `EngineSpecError` (a usage error, the CLI exits 2) when the name or spec is wrong;
 `EngineLoadError` (exit 1) when a correctly named engine fails to import or its entry point is
 broken. Both say in one line the engine, the spec and the cause or the fix. Building engines
@@ -37,6 +47,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .base import Engine, EngineLoadError, EngineSpecError
+
+__all__ = ["DISTRIBUTION", "GROUP", "SPEC_FORMS", "EngineNotInstalled", "Registration",
+           "available_engines", "missing_modules", "not_installed", "registrations", "resolve"]
 
 GROUP = "bicycle_xval.engines"
 DISTRIBUTION = "bicycle-xval"
@@ -113,6 +126,63 @@ def available_engines() -> tuple[str, ...]:
         if r.name not in names:
             names.append(r.name)
     return tuple(names)
+
+
+# -- what an engine needs beyond the core ---------------------------------------------------
+
+class EngineNotInstalled(EngineLoadError):
+    """A registered engine whose declared ``REQUIRES`` are not installed: not a failure of the
+    engine, an extra the user did not install. ``reason`` is the listing's line, e.g.
+    "not installed: pip install 'bicycle-xval[exudyn]'"."""
+
+    def __init__(self, engine: str, reason: str):
+        super().__init__(f"engine {engine!r} is {reason}")
+        self.engine, self.reason = engine, reason
+
+
+def missing_modules(requires) -> tuple[str, ...]:
+    """The top-level modules of ``requires`` that cannot be found (``find_spec``: nothing is
+    imported). An import hook that refuses a name counts as missing."""
+    out = []
+    for name in requires:
+        try:
+            found = importlib.util.find_spec(name) is not None
+        except (ImportError, ValueError):
+            found = False
+        if not found:
+            out.append(name)
+    return tuple(out)
+
+
+def _requirements(module, engine: str, target: str, distribution: str | None) -> str | None:
+    """The 'not installed: ...' line for ``module``'s ``REQUIRES``/``EXTRA``, or None when
+    everything it declares is there."""
+    requires = getattr(module, "REQUIRES", ())
+    extra = getattr(module, "EXTRA", None)
+    if isinstance(requires, str) or not all(isinstance(r, str) and _MODULE.match(r) for r in requires) \
+            or not (extra is None or isinstance(extra, str) and _IDENT.match(extra.replace("-", "_"))):
+        raise EngineLoadError(f"engine {engine!r} ({target}): REQUIRES must be a tuple of module "
+                              f"names and EXTRA an extra's name; got {requires!r}, {extra!r}")
+    gone = missing_modules(r.split(".")[0] for r in requires)
+    if not gone:
+        return None
+    if extra and distribution:
+        return f"not installed: pip install '{distribution}[{extra}]'"
+    return f"not installed: it needs {', '.join(gone)} (install the package that provides " \
+           f"{'it' if len(gone) == 1 else 'them'})"
+
+
+def not_installed(name: str) -> str | None:
+    """For a registered engine name: its 'not installed: pip install ...' line when a module it
+    declares in ``REQUIRES`` is missing, else None (also for unknown names and specs; those are
+    `resolve`'s errors). Imports only the light module the entry point names."""
+    try:
+        resolve(name)
+    except EngineNotInstalled as exc:
+        return exc.reason
+    except (EngineLoadError, EngineSpecError):   # broken or unknown: not this question
+        return None
+    return None
 
 
 # -- resolving a spec to a class -------------------------------------------------------------
@@ -217,6 +287,9 @@ def resolve(spec: str) -> tuple[type[Engine], str, str]:
                                   f"module name nor a path ending in .py")
         module = _import_module(left, label, spec)
         where = getattr(module, "__file__", None) or left
+    reason = _requirements(module, label, spec, None)
+    if reason is not None:
+        raise EngineNotInstalled(label, reason)
     cls = _engine_class(module, cls_name, label, spec)
     return cls, str(getattr(cls, "name", cls_name) or cls_name), where
 
@@ -250,6 +323,9 @@ def _resolve_target(reg: Registration) -> tuple[type[Engine], str, str]:
                               f"is not package.module:Class; the package's metadata is broken")
     try:
         module = _import_module(module_name, reg.name, reg.target)
+        reason = _requirements(module, reg.name, reg.target, reg.distribution or DISTRIBUTION)
+        if reason is not None:
+            raise EngineNotInstalled(reg.name, reason)
         cls = _engine_class(module, cls_name, reg.name, reg.target)
         return cls, reg.name, f"{reg.target} from {reg.source}"
     except EngineSpecError as exc:

@@ -45,9 +45,12 @@ def built(tmp_path_factory):
     assert res.returncode == 0, res.stderr[-2000:]
     files = {p.relative_to(tmp / "lib").as_posix() for p in (tmp / "lib").rglob("*") if p.is_file()}
     requires = (next((tmp / "meta").glob("*.egg-info")) / "requires.txt").read_text()
-    base = requires.split("\n[")[0]               # the extras ([test], [mutation]) follow
+    # the core, then the extras: the engines' and the sweep's count (issue 22: their imports
+    # are declared there), the developers' ([test], [mutation]) do not
+    base, *extras = requires.split("\n[")
+    kept = [base] + [e.split("]", 1)[1] for e in extras if e.split("]")[0] not in ("test", "mutation")]
     names = {_canonical(line.split(";")[0].split("[")[0].split(">")[0].split("=")[0].split("<")[0])
-             for line in base.splitlines() if line.strip()}
+             for part in kept for line in part.splitlines() if line.strip()}
     return files, names
 
 

@@ -24,6 +24,9 @@ def cmd_engines(args) -> int:
     infos = engine_info(args.spec)
     for i in infos:
         print(f"{i.name}  ({i.source}; {i.spec})")
+        if i.not_installed:    # an optional engine whose extra is missing: listed, not an error
+            print(f"  {i.not_installed}")
+            continue
         if i.error:
             print(f"  cannot be loaded: {i.error}")
             continue

@@ -19,6 +19,9 @@ from pathlib import Path
 from .errors import EXIT_FAIL, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, UsageError
 
 MAX_WORKERS = 1024
+#: what the sweep imports beyond the core (its extra, pyproject.toml): Dask's distributed
+#: scheduler, the progress bar, Parquet
+SWEEP_MODULES = ("dask", "distributed", "tqdm", "pyarrow")
 
 
 def add_sweep_parser(sub) -> None:
@@ -50,7 +53,7 @@ def add_sweep_parser(sub) -> None:
 
 def spec_from_args(args):
     """The `SweepSpec` of the options, or a `UsageError` (one line)."""
-    from engines import EngineSpecError
+    from engines import EngineNotInstalled, EngineSpecError
     from engines.registry import resolve
     from reference_model import resolve_model, load_model
 
@@ -63,7 +66,7 @@ def spec_from_args(args):
     for e in engines:
         try:
             resolve(e)
-        except EngineSpecError as exc:
+        except (EngineSpecError, EngineNotInstalled) as exc:
             raise UsageError(f"--engines {e}: {exc}") from None
     checks = tuple(c.strip() for c in args.checks.split(",") if c.strip())
     try:
@@ -74,6 +77,11 @@ def spec_from_args(args):
 
 
 def cmd_sweep(args) -> int:
+    from engines.registry import missing_modules
+    missing = missing_modules(SWEEP_MODULES)
+    if missing:
+        raise UsageError(f"bicycle-xval sweep needs {', '.join(missing)} (not installed): "
+                         "pip install 'bicycle-xval[sweep]'")
     if args.scheduler and args.workers is not None:
         raise UsageError("--scheduler and --workers: the workers of a running scheduler are "
                          "its own; give one of them")

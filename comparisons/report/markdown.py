@@ -139,6 +139,8 @@ def _verdict(summary: dict) -> list[str]:
     return [
         f"**{head}**", "",
         *[md("- **Dropped**: engine {}: {}", code(d["engine"]), d["reason"]) for d in dropped],
+        *[md("- Not run: engine {}: {}", code(d["engine"]), d["reason"])
+          for d in summary.get("not_installed_engines", [])],
         md("- Engines: {}", ", ".join(summary["engines"]))
         + f"{' (quick subset of scenarios and states)' if summary.get('quick') else ''}.",
         *([f"- Figures: {_FIGURES_SAID[summary['figures']]}"]

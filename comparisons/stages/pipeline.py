@@ -74,6 +74,7 @@ class Options:
     engine_options: tuple[tuple[str, tuple[tuple[str, object], ...]], ...] = ()   # spec -> options
     sections: tuple[str, ...] = SECTIONS   # which engine sections run besides the scenarios
     figures: str = ""                 # FIGURE_POLICIES; "" = 'failing' with --quick, else 'all'
+    not_installed: tuple[tuple[str, str], ...] = ()   # default engines whose extra is missing: why
 
     @property
     def figure_policy(self) -> str:
@@ -111,21 +112,27 @@ def select(scenarios: str | None, quick: bool, engines: str | None) -> Options:
                                  f"{', '.join(SCENARIOS)}")
     chosen = list(ENGINE_NAMES) if engines is None else [e.strip() for e in engines.split(",")
                                                          if e.strip()]
-    from engines import EngineSpecError, available_engines
+    from engines import EngineNotInstalled, EngineSpecError, available_engines, not_installed
     from engines.registry import resolve
+    # the default list: the engines installed; one whose extra is missing is listed, not run
+    absent = tuple((e, r) for e in (chosen if engines is None else ())
+                   if (r := not_installed(e)) is not None)
+    chosen = [e for e in chosen if e not in dict(absent)]
     for e in chosen:
         if ":" in e:
             try:
                 resolve(e)
-            except EngineSpecError as exc:
+            except (EngineSpecError, EngineNotInstalled) as exc:
                 raise SelectionError(f"--engines: {exc}") from None
         elif e not in available_engines():
             raise SelectionError(f"unknown engine {e!r} in --engines; choose from "
                                  f"{', '.join(available_engines())} or give a spec "
                                  "package.module:Class or path/file.py:Class")
+        elif (reason := not_installed(e)) is not None:    # asked for by name: it must run
+            raise SelectionError(f"--engines: engine {e!r} is {reason}")
     if "reference" not in chosen:
         chosen.insert(0, "reference")   # everything is compared against it
-    return Options(tuple(names), tuple(dict.fromkeys(chosen)), quick)
+    return Options(tuple(names), tuple(dict.fromkeys(chosen)), quick, not_installed=absent)
 
 
 # -- environment -------------------------------------------------------------------------------
@@ -333,6 +340,8 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         setups = [s for s in setups if s.engine not in {d[0] for d in dropped}]
         for name, reason in dropped:
             progress(f"engine {name} dropped: {reason}")
+    for name, reason in opts.not_installed:   # not a failure: an extra the user did not install
+        progress(f"engine {name} not run: {reason}")
     labels = [s.label for s in setups]
     from engines.registry import resolve
     for spec in opts.engines:   # shared work (e.g. generated code) once, inherited by the workers
@@ -448,6 +457,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "passed": not failed,
         "engines": list(opts.engines),
         "dropped_engines": [{"engine": n, "reason": r} for n, r in dropped],
+        "not_installed_engines": [{"engine": n, "reason": r} for n, r in opts.not_installed],
         "scenarios": rows,
         "engine_runs": [{"engine": r.engine, "scenario": r.scenario, "model": r.model,
                          "status": r.status, "t_end": round(r.t_end, 6), "message": r.message}

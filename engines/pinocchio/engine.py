@@ -54,12 +54,13 @@ from reference_model import COORDINATES, Model
 from reference_model.model import DEP, IND, ForwardResult, raise_on_status, torque_array
 from reference_model.scenarios import Scenario, run_forward, run_inverse
 
-from .base import CAPABILITIES, Engine, EngineError
+from ..base import CAPABILITIES, Engine, EngineError
 
 try:
     import pinocchio as pin
-except ImportError as exc:  # pragma: no cover - pin is a declared dependency
-    raise EngineError("the Pinocchio adapter needs the package 'pin' (pip install pin)") from exc
+except ImportError as exc:  # pragma: no cover - the registry checks REQUIRES first
+    raise EngineError("the Pinocchio adapter needs the package 'pin' "
+                      "(pip install 'bicycle-xval[pinocchio]')") from exc
 
 N_Q, N_C = 8, 5
 # joint ids in the Pinocchio model (0 is the universe)
