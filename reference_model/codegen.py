@@ -60,7 +60,7 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 
 from .names import COORDINATES
-from .params import PARAMETER_NAMES
+from .parameters.schema import PARAMETER_NAMES
 
 if TYPE_CHECKING:   # sympy is imported only when code is generated (module doc)
     from . import derivation as dv
@@ -68,13 +68,12 @@ if TYPE_CHECKING:   # sympy is imported only when code is generated (module doc)
 PACKAGE_DIR = Path(__file__).resolve().parent
 RUNTIME_C = PACKAGE_DIR / "runtime.c"
 #: Files of this package the generated code depends on (relative to the package folder):
-#: the derivation (the equations) and names.py (its coordinate and point names), params.py
-#: (the parameter layout p[i]), runtime.c (the KKT solves, #included), codegen.py and
-#: codegen_emit.py (how code is printed), numpy_runtime.py (the numpy backend's solves).
-#: Editing any of them changes the cache key.
-KEY_SOURCES = ("derivation.py", "names.py", "params.py", "runtime.c", "codegen.py",
-               "codegen_emit.py", "numpy_runtime.py",
-               "benchmark.py", "benchmark_files.py")   # params.py imports these (file formats)
+#: the derivation (the equations) and names.py (its coordinate and point names),
+#: parameters/schema.py (the parameter layout p[i], the contact models), runtime.c (the KKT
+#: solves, #included), codegen.py and codegen_emit.py (how code is printed), numpy_runtime.py
+#: (the numpy backend's solves). Editing any of them changes the cache key.
+KEY_SOURCES = ("derivation.py", "names.py", "parameters/schema.py", "runtime.c", "codegen.py",
+               "codegen_emit.py", "numpy_runtime.py")
 CACHE_ENV = "BICYCLE_XVAL_CACHE"
 BACKEND_ENV = "BICYCLE_XVAL_BACKEND"
 BACKENDS = ("c", "numpy")

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from .names import BODIES, BODY_NAMES, COORDINATES, TORQUE_NAMES  # noqa: F401 (re-exported)
-from .params import CONTACT_MODELS, PARAMETER_NAMES
+from .parameters.schema import CONTACT_MODELS, PARAMETER_NAMES
 
 
 

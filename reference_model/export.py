@@ -33,7 +33,7 @@ from xml.sax.saxutils import quoteattr
 
 from .export_mjcf import mjcf_text
 from .names import BODY_NAMES, COORDINATES, TORQUE_NAMES
-from .params import PARAMETER_NAMES, Parameters, resolve_model
+from .parameters import PARAMETER_NAMES, Parameters, resolve_model
 
 FORMATS = ("urdf", "mjcf", "json")
 SCHEMA = "bicycle-xval/model-export/1"

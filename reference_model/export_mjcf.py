@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
-from .params import Parameters
+from .parameters.values import Parameters
 
 INTEGRATORS = ("Euler", "implicit", "implicitfast", "RK4")
 CONES = ("elliptic", "pyramidal")

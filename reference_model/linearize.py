@@ -68,7 +68,8 @@ from scipy.optimize import brentq
 
 from . import codegen
 from .names import COORDINATES
-from .params import PARAMETER_NAMES, Parameters
+from .parameters.schema import PARAMETER_NAMES
+from .parameters.values import Parameters
 
 if TYPE_CHECKING:  # pragma: no cover
     from .model import Model

@@ -61,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from .params import NAMED_MODELS
+from .parameters.loading import NAMED_MODELS
 from .scenario_types import (FORWARD_QUANTITIES, INVERSE_QUANTITIES, MOTIONS, QUANTITIES,
                              TORQUE_FUNCTIONS, ExpectedDifference, Scenario, TorqueSamples)
 from .solvers import CONSTRAINT_HANDLING, DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE

@@ -19,7 +19,8 @@ ROOT = Path(__file__).resolve().parents[1]
 def _package_dependencies(package: Path) -> set[str]:
     """Files of the package the generated code depends on, found without codegen's own list:
     codegen.py, every package module it imports (transitively, relative imports anywhere in
-    the module, lazy ones included) and every file the generated C #includes."""
+    the module, lazy ones included, into subpackages too) and every file the generated C
+    #includes; as paths relative to the package folder."""
     found, todo = set(), ["codegen.py"]
     while todo:
         name = todo.pop()
@@ -29,10 +30,13 @@ def _package_dependencies(package: Path) -> set[str]:
         text = (package / name).read_text()
         if not name.endswith(".py"):
             continue
+        here = Path(name).parent
         for node in ast.walk(ast.parse(text)):
-            if isinstance(node, ast.ImportFrom) and node.level == 1:
+            if isinstance(node, ast.ImportFrom) and node.level >= 1:
+                base = here.parents[node.level - 2] if node.level > 1 else here
                 mods = [node.module] if node.module else [a.name for a in node.names]
-                todo += [f"{m}.py" for m in mods if (package / f"{m}.py").exists()]
+                paths = [(base / m.replace(".", "/")).as_posix() for m in mods]
+                todo += [f"{m}.py" for m in paths if (package / f"{m}.py").exists()]
         todo += re.findall(r'#include \\?"(\w+\.c)\\?"', text)
     return found
 
@@ -43,9 +47,9 @@ def test_key_changes_when_any_source_of_the_generated_code_changes(tmp_path):
     source missing from it is caught), and each variant option: every one changes the key."""
     package = tmp_path / "reference_model"
     shutil.copytree(ROOT / "reference_model", package,
-                    ignore=shutil.ignore_patterns("__pycache__", "parameters"))
+                    ignore=shutil.ignore_patterns("__pycache__", "*.toml"))
     deps = _package_dependencies(package)
-    assert {"derivation.py", "params.py", "runtime.c", "codegen.py"} <= deps, deps
+    assert {"derivation.py", "parameters/schema.py", "runtime.c", "codegen.py"} <= deps, deps
 
     def key(**kw):
         return codegen.cache_key("thesis", package_dir=package, cc=("gcc",), **kw)
