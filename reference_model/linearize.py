@@ -61,7 +61,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import Callable, Protocol
 
 import numpy as np
 from scipy.optimize import brentq
@@ -71,13 +71,18 @@ from .names import COORDINATES
 from .parameters.schema import PARAMETER_NAMES
 from .parameters.values import Parameters
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .model import Model
-
 __all__ = [
-    "CriticalSpeedError", "Linearization", "LinearizationError", "capsize_speed", "eigenvalues",
-    "linearize", "sort_eigenvalues", "weave_speed",
+    "CriticalSpeedError", "Linearization", "LinearizationError", "ParametrizedModel",
+    "capsize_speed", "eigenvalues", "linearize", "sort_eigenvalues", "weave_speed",
 ]
+
+
+class ParametrizedModel(Protocol):
+    """What the linearization needs of a model: its validated parameters
+    (`reference_model.model.Model` is one). Typed so, this module does not import the model's,
+    which imports this one for ``Model.eigenvalues``."""
+
+    params: Parameters
 
 _IND = tuple(COORDINATES.index(n) for n in ("theta", "psi", "gamma"))
 _DEP = tuple(COORDINATES.index(n) for n in ("xc", "yc", "phi", "beta", "eps"))
@@ -419,7 +424,7 @@ def _speeds(v, what: str = "v") -> np.ndarray:
     return a
 
 
-def linearize(model: "Model", v: float) -> Linearization:
+def linearize(model: ParametrizedModel, v: float) -> Linearization:
     """Linearize ``model`` about upright straight running at forward speed ``v`` (m/s).
 
     Raises :class:`LinearizationError` for a model with drag (no steady motion) or a geometry
@@ -450,7 +455,7 @@ def sort_eigenvalues(lam: np.ndarray) -> np.ndarray:
     return np.take_along_axis(lam, order, axis=-1)
 
 
-def eigenvalues(model: "Model", v) -> np.ndarray:
+def eigenvalues(model: ParametrizedModel, v) -> np.ndarray:
     """The four non-trivial eigenvalues of the roll/steer linearization at speed(s) ``v``.
 
     ``v`` a scalar (returns (4,) complex) or a 1-D array (returns (n, 4)); order as
@@ -465,13 +470,13 @@ def eigenvalues(model: "Model", v) -> np.ndarray:
     return lam[0] if vs.ndim == 0 else lam
 
 
-def _weave_real(model: "Model", v: float) -> float:
+def _weave_real(model: ParametrizedModel, v: float) -> float:
     """Real part of the weave eigenvalue (first complex pair), nan if all four are real."""
     lam = eigenvalues(model, v)
     return float(lam[0].real) if lam[0].imag != 0 else float("nan")
 
 
-def _capsize_function(model: "Model"):
+def _capsize_function(model: ParametrizedModel):
     """det(g K0 + v^2 K2) (roll/steer, model signs): zero exactly where an eigenvalue is 0."""
     e = _expansion(model.params)
     rs = np.ix_(_ROLL_STEER, _ROLL_STEER)
@@ -487,7 +492,7 @@ def _grid(speeds: tuple[float, float], step: float) -> np.ndarray:
     return np.linspace(lo, hi, n + 1)
 
 
-def weave_speed(model: "Model", speeds: tuple[float, float] = (0.0, 20.0), *,
+def weave_speed(model: ParametrizedModel, speeds: tuple[float, float] = (0.0, 20.0), *,
                 step: float = 0.01) -> float:
     """The weave speed (m/s): where the weave pair's real part crosses from + to -.
 
@@ -512,7 +517,7 @@ def weave_speed(model: "Model", speeds: tuple[float, float] = (0.0, 20.0), *,
                         rtol=4 * np.finfo(float).eps, maxiter=200))
 
 
-def capsize_speed(model: "Model", speeds: tuple[float, float] | None = None, *,
+def capsize_speed(model: ParametrizedModel, speeds: tuple[float, float] | None = None, *,
                   step: float = 0.01) -> float:
     """The capsize speed (m/s): above the weave speed, where the real capsize eigenvalue crosses
     zero (from stable to unstable).
