@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import codegen
+from .equations import codegen
 from .names import BODY_NAMES, COORDINATES, POINT_NAMES, TORQUE_NAMES
 from .parameters.loading import resolve_model
 from .parameters.values import Parameters
