@@ -13,6 +13,11 @@ from .parameters.benchmark import (BENCHMARK_DESCRIPTIONS, BENCHMARK_NAMES,  # n
                                    FORMULAS_MODULE, TABLE1, Table1, reference_parameters,
                                    table1_from_mapping)
 from .parameters.loading import BENCHMARK_FILE, main, named_model_text  # noqa: F401
+# names the old module had by importing them, so every old import still works
+from .parameters.schema import (MEMORY_SOURCE, PARAMETER_DESCRIPTIONS,  # noqa: F401
+                                PARAMETER_GROUPS, PARAMETER_NAMES, PARAMETER_UNITS,
+                                ParameterError, TriangleInequalityError)
+from .parameters.values import Parameters  # noqa: F401
 from .parameters.model_file import float_text, toml_string, toml_text  # noqa: F401
 from .parameters.values import (attach_benchmark, parameters_from_benchmark,  # noqa: F401
                                 to_benchmark)

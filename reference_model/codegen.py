@@ -5,3 +5,5 @@ the cache's robustness tests drive directly).
 
 from .equations.codegen import *  # noqa: F401,F403
 from .equations.codegen import __all__, _commit  # noqa: F401
+# the old module's imports
+from .equations.codegen import COORDINATES, PARAMETER_NAMES  # noqa: F401

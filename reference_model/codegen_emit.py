@@ -4,3 +4,5 @@
 
 from .equations.emit import *  # noqa: F401,F403
 from .equations.emit import __all__  # noqa: F401
+# the old module's imports
+from .equations.emit import COORDINATES, POINT_NAMES, dv  # noqa: F401

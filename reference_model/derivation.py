@@ -4,3 +4,5 @@
 
 from .equations.derivation import *  # noqa: F401,F403
 from .equations.derivation import __all__  # noqa: F401
+# the old module's imports
+from .equations.derivation import CONTACT_MODELS, PARAMETER_NAMES  # noqa: F401

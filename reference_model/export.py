@@ -8,3 +8,6 @@ package ``reference_model/exports/`` (``description``: the model as plain data a
 
 from .exports import *  # noqa: F401,F403
 from .exports import __all__  # noqa: F401
+# names the old module had by importing them, so every old import still works
+from .names import BODY_NAMES, COORDINATES, TORQUE_NAMES  # noqa: F401
+from .parameters import PARAMETER_NAMES, Parameters, resolve_model  # noqa: F401

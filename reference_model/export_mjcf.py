@@ -6,3 +6,4 @@ module re-exports it.
 
 from .exports.mjcf import *  # noqa: F401,F403
 from .exports.mjcf import __all__  # noqa: F401
+from .exports.mjcf import Parameters  # noqa: F401 (the old module's import)

@@ -4,3 +4,5 @@
 
 from .scenarios.definition import *  # noqa: F401,F403
 from .scenarios.definition import __all__  # noqa: F401
+from .scenarios.definition import (DEFAULT_FALL_LIMIT, THESIS_BAUMGARTE,  # noqa: F401
+                                   IndependentMotion)  # (the old module's imports)

@@ -21,7 +21,7 @@ A parameter file is TOML with five tables::
     triangle = "strict"          # or "warn": see below
 
     [benchmark]                  # optional: the Table 1 values the file was generated from
-    w = 1.02                     # (reference_model/parameters/benchmark.py; all 26 names, SI, lam in rad)
+    w = 1.02                     # (parameters/benchmark.py; all 26 names, SI, lam in rad)
 
 The optional ``[benchmark]`` table (written by :func:`toml_text`, the importer's writer) must
 agree with the model's values through the formulas of ``reference_model/parameters/benchmark.py``

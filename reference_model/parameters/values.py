@@ -37,8 +37,8 @@ class Parameters:
     ``triangle`` is the triangle-inequality check mode (:data:`TRIANGLE_MODES`): "strict"
     raises :class:`TriangleInequalityError`, "warn" keeps one line per violating body in
     ``warnings`` (a tuple of strings, empty for a clean set; not an argument). ``benchmark``
-    is the :class:`~reference_model.parameters.benchmark.Table1` the values were computed from, if any
-    (provenance for an exact :func:`to_benchmark`; not compared;
+    is the :class:`~reference_model.parameters.benchmark.Table1` the values were computed
+    from, if any (provenance for an exact :func:`to_benchmark`; not compared;
     :meth:`replace` drops it when a parameter value changes).
     """
 
@@ -152,8 +152,8 @@ class Parameters:
     ) -> Parameters:
         """The model from Meijaard et al. (2007) Table 1 names (``w, c, lam, g, rR, ...``: all
         26, any real numbers, NumPy scalars included), front contact "disc" (the benchmark's
-        knife-edge wheel), the formulas of :mod:`reference_model.parameters.benchmark`. Bad input raises
-        one :class:`ParameterError` naming the benchmark key."""
+        knife-edge wheel), the formulas of :mod:`reference_model.parameters.benchmark`. Bad
+        input raises one :class:`ParameterError` naming the benchmark key."""
         table = checked_table(mapping, source=source,
                               allow_triangle_violation=allow_triangle_violation)
         return cls(**model_values(table), name=name, contact="disc", source=str(source),

@@ -19,9 +19,9 @@ is: `Scenario` and its parts), ``files`` (the scenario file format, which a user
 ``registry`` (the built-in scenarios by name: ``SCENARIOS``, read from their files on first
 use) and ``runs`` (how to run one on the reference model). This package re-exports the
 registry, the runs and the definitions; ``reference_model.scenario_types`` and
-``reference_model.scenario_files`` are the older names of ``definition`` and ``files``. The thesis samples every scenario on
-t = 0:0.01:2*pi (629 samples); here t_k = 0.01 k exactly. Engines run the same `Scenario`
-objects (this module depends on nothing above the model).
+``reference_model.scenario_files`` are the older names of ``definition`` and ``files``. The
+thesis samples every scenario on t = 0:0.01:2*pi (629 samples); here t_k = 0.01 k exactly.
+Engines run the same `Scenario` objects (this package depends on nothing above the model).
 """
 
 from .definition import (FORWARD_QUANTITIES, INVERSE_QUANTITIES, MOTIONS, QUANTITIES,
@@ -29,6 +29,10 @@ from .definition import (FORWARD_QUANTITIES, INVERSE_QUANTITIES, MOTIONS, QUANTI
                          TorqueSamples)
 from .registry import UnknownScenarioError, builtin_scenarios, get_scenario
 from .runs import initial_state, run_forward, run_inverse, torque_input
+# what the old flat module had imported, so every old import of reference_model.scenarios works
+from ..model import DEP, Model  # noqa: F401,E402
+from ..solvers import (ConsistentState, InverseDynamics, Trajectory,  # noqa: F401
+                       consistent_state, inverse_dynamics, inverse_kinematics, simulate)
 
 __all__ = [  # the registry and the runs; the scenario definitions
     "SCENARIOS", "UnknownScenarioError", "builtin_scenarios", "get_scenario", "initial_state",
