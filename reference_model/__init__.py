@@ -8,7 +8,7 @@
 from .names import BODY_NAMES, COORDINATES, TORQUE_NAMES
 from .model import (CONSTRAINT_NAMES, DEPENDENT, INDEPENDENT, Model, ModelEvaluationError,
                     load_model)
-from .params import NAMED_MODELS, ParameterError, Parameters, load_parameters, resolve_model
+from .parameters import NAMED_MODELS, ParameterError, Parameters, load_parameters, resolve_model
 
 __all__ = [
     "BODY_NAMES", "CONSTRAINT_NAMES", "COORDINATES", "DEPENDENT", "INDEPENDENT", "NAMED_MODELS",

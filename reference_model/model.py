@@ -17,9 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import codegen
+from .equations import codegen
 from .names import BODY_NAMES, COORDINATES, POINT_NAMES, TORQUE_NAMES
-from .params import Parameters, resolve_model
+from .parameters.loading import resolve_model
+from .parameters.values import Parameters
 
 INDEPENDENT = ("theta", "psi", "gamma")
 DEPENDENT = ("xc", "yc", "phi", "beta", "eps")
