@@ -120,6 +120,8 @@ def test_the_run_path_imports_neither_sympy_nor_pandas():
     load_model("thesis").mass_matrix(np.zeros(8))     # the entries exist before the subprocess
     from engines import load_engine
     load_engine("kane", load_model("thesis-disc"))
+    from comparisons.judgments.eigenvalues import eigenvalue_curves   # the linearization's entry
+    eigenvalue_curves(load_model("benchmark"), [1.0, 5.0])            # too (a cold cache: sympy)
     code = ("import sys, numpy as np, comparisons.cli.main, comparisons.stages.pipeline, engines\n"
             "from comparisons.stages.pool import warm_imports\n"
             "warm_imports()\n"
