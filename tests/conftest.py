@@ -78,3 +78,17 @@ def fast_cc(tmp_path_factory) -> str:
     path.write_text('#!/bin/sh\nexec gcc "$@" -O0\n')
     path.chmod(0o755)
     return str(path)
+
+
+@pytest.fixture(scope="session")
+def failing_tolerances(tmp_path_factory):
+    """A copy of the packaged tolerance file with every tolerance at 1e-300: any round-off
+    difference (~1e-16 between two engines' terms) fails it, so every judged check that is not
+    exactly equal fails."""
+    import re
+
+    from comparisons.judgments.tolerances import TOLERANCES_FILE
+    path = tmp_path_factory.mktemp("tolerances") / "failing.toml"
+    path.write_text(re.sub(r"(?m)^tolerance = .*$", "tolerance = 1e-300",
+                           TOLERANCES_FILE.read_text()))
+    return path

@@ -44,3 +44,44 @@ def test_a_declared_file_is_read_like_an_xfails_file(tmp_path):
     f.write_text("# comment\ntest_a[{engine}-*]  # why\n", encoding="utf-8")
     assert declared_xfails(SimpleNamespace(conformance_xfails=f)) == {"test_a[{engine}-*]": "why"}
     assert declared_xfails(SimpleNamespace()) == {}
+
+
+class _Config:
+    """What `pytest_configure` asks of pytest's config: the plugin's options, by dest."""
+
+    def __init__(self, **options):
+        self.options = {"bx_engines": ["pinocchio"], "bx_models": ["thesis"], "bx_options": [],
+                        "bx_xfails": None, "bx_tolerances": None, **options}
+
+    def getoption(self, name):
+        return self.options[name]
+
+    def addinivalue_line(self, *args):
+        pass
+
+
+def test_the_plugin_reads_its_tolerances_option_once(tmp_path, failing_tolerances):
+    """``--tolerances FILE`` is read in `pytest_configure` into the session's value, which the
+    checks judge by (the ``tolerances`` fixture); without it the packaged file; a file lacking a
+    table is a usage error naming it. In process: no pytest subprocess (~6 s each)."""
+    from comparisons.conformance.plugin import pytest_configure
+    from comparisons.judgments.terms import compare_term, random_states
+    from comparisons.judgments.tolerances import load_tolerances
+    from engines import load_engine
+    from reference_model import load_model
+    failing = failing_tolerances
+    config = _Config(bx_tolerances=str(failing))
+    pytest_configure(config)
+    tols = config._bx_conformance.tolerances
+    assert tols == load_tolerances(failing) and tols["mass_matrix"].tolerance == 1e-300
+    model = load_model("thesis")      # Pinocchio's M differs from the reference's by round-off
+    res = compare_term("mass_matrix", load_engine("reference", model),
+                       load_engine("pinocchio", model), random_states(4), tols["mass_matrix"])
+    assert not res.passed
+    default = _Config()
+    pytest_configure(default)
+    assert default._bx_conformance.tolerances == load_tolerances()
+    few = tmp_path / "few.toml"
+    few.write_text('[mass_matrix]\ntolerance = 1e-12\nscale = "max_abs"\nreason = "r"\n')
+    with pytest.raises(pytest.UsageError, match=r"--tolerances: .*lacks \[inverse_dynamics\]"):
+        pytest_configure(_Config(bx_tolerances=str(few)))

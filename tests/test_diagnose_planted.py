@@ -42,9 +42,11 @@ from comparisons.judgments.causes import TORQUE_BODY, body_angular_jacobians
 from comparisons.judgments.diagnose import (DEFAULT_SEED, LOCALIZED, Block, ModelCauses,
                                             check_block, localize)
 from comparisons.judgments.terms import random_states
+from comparisons.judgments.tolerances import load_tolerances
 from planted.engines import CONTROLS, PLANTED, MassMatrixUpper, TwoMistakes
 from reference_model import COORDINATES, TORQUE_NAMES, load_model
 
+TOLS = load_tolerances()   # the packaged tolerances.toml, read once
 N_STATES = 8
 ENGINES_FILE = Path(__file__).parent / "planted" / "engines.py"
 #: planted engine -> the fitted change of its cause (engines minus model), from the planted values
@@ -61,7 +63,8 @@ def diagnosed():
     models = {n: load_model(n) for n in ("thesis", "benchmark")}
     shared = {n: ModelCauses(m, states) for n, m in models.items()}
     todo = {cls: spec[0] for cls, spec in PLANTED.items()} | CONTROLS | {TwoMistakes: "thesis"}
-    return {cls: localize(models[m], states, [cls(models[m])], shared=shared[m])
+    return {cls: localize(models[m], states, [cls(models[m])], shared=shared[m],
+                           tolerances=TOLS)
             for cls, m in todo.items()}
 
 
@@ -194,7 +197,8 @@ def test_a_near_cause_is_said_to_be_near():
     round-off (a true cause leaves at most ~1e-8 of the difference); diagnose must say so."""
     from planted.engines import LinearDrag
     thesis = load_model("thesis")
-    loc = localize(thesis, random_states(N_STATES, seed=DEFAULT_SEED), [LinearDrag(thesis)])
+    loc = localize(thesis, random_states(N_STATES, seed=DEFAULT_SEED), [LinearDrag(thesis)],
+                   tolerances=TOLS)
     e = loc.explanation
     assert e.causes == ("cv",) and 1 - 1e-2 < e.explained < 1 - 1e-6
     assert "a near cause, perhaps not the exact one" in e.describe()

@@ -30,10 +30,12 @@ from comparisons.judgments.diagnose import (TERMS, diagnose, engine_terms, model
                                             parameter_body)
 from comparisons.judgments.faults import FAULTS, run_fault_suite, unfaulted
 from comparisons.judgments.terms import random_states
+from comparisons.judgments.tolerances import load_tolerances
 from engines import load_engine
 from reference_model import Model, ParameterError, codegen, load_model
 from reference_model.params import PARAMETER_NAMES, THESIS_FILE
 
+TOLS = load_tolerances()   # the packaged tolerances.toml, read once
 MASS_GEOMETRY = ("M", "Qv", "Qgrav", "Qaero")
 EXPECTED = {   # fault -> (terms, causes, body, fitted change of each cause)
     "I3xz-sign": (("M", "Qv"), ("I3xz",), 3, (-3.64,)),
@@ -49,7 +51,7 @@ BODY_TEXT = {None: "all bodies", 2: "body 2 rear wheel", 3: "body 3 frame+rider"
 
 @pytest.fixture(scope="module")
 def suite():
-    return {r.fault: r for r in run_fault_suite(engines=("pinocchio",))}
+    return {r.fault: r for r in run_fault_suite(engines=("pinocchio",), tolerances=TOLS)}
 
 
 def test_registry_is_the_issue_list(thesis):
@@ -105,7 +107,7 @@ def test_fault_entries_point_at_the_right_matrix(suite):
 
 def test_no_false_positive():
     """The unfaulted model agrees with both engines on every term and quantity, with margin."""
-    loc = unfaulted(engines=("pinocchio", "exudyn"))
+    loc = unfaulted(engines=("pinocchio", "exudyn"), tolerances=TOLS)
     assert loc.agrees and not loc.detected and loc.explanation is None
     assert {c.term for c in loc.checks} == set(TERMS)
     worst = max(c.max_error / c.tolerance for c in loc.checks + loc.quantities)
@@ -131,7 +133,7 @@ def test_a_fault_the_terms_cannot_show_is_caught_in_the_forward_run(thesis):
 
 def test_fault_suite_rejects_unknown_faults():
     with pytest.raises(ValueError, match="unknown fault 'I3xz'.*I3xz-sign"):
-        run_fault_suite(faults=["I3xz"])
+        run_fault_suite(faults=["I3xz"], tolerances=TOLS)
 
 
 # -- the gyroscopic fault variant of the derivation ----------------------------------------------
@@ -197,7 +199,7 @@ def _args(file, **kw):
 
 
 def test_diagnose_thesis_against_itself_agrees(capsys):
-    d = diagnose(THESIS_FILE, n_states=8)
+    d = diagnose(THESIS_FILE, n_states=8, tolerances=TOLS)
     assert d.agrees and d.declared == () and d.localization.explanation is None
     assert run_diagnose(_args(THESIS_FILE)) == 0
     out = capsys.readouterr().out
@@ -210,7 +212,8 @@ def test_diagnose_localizes_a_flipped_I3xz(tmp_path, capsys):
     assert line in text
     bad = tmp_path / "flipped.toml"
     bad.write_text(text.replace(line, 'I3xz = { value = 1.82, unit = "kg*m^2" }'))
-    d = diagnose(bad, against="thesis", engines=("pinocchio", "exudyn"), n_states=8)
+    d = diagnose(bad, against="thesis", engines=("pinocchio", "exudyn"), n_states=8,
+                 tolerances=TOLS)
     assert not d.agrees
     e = d.localization.explanation
     assert e.causes == ("I3xz",) and e.body == 3
@@ -225,7 +228,7 @@ def test_diagnose_localizes_a_flipped_I3xz(tmp_path, capsys):
     data = json.loads(out_json.read_text())
     assert data["agrees"] is False and data["localized_to"] == "M, Qv via I3xz (body 3 frame+rider)"
     # against itself, the same broken file is consistent: engines and adapters agree
-    assert diagnose(bad, n_states=8).agrees
+    assert diagnose(bad, n_states=8, tolerances=TOLS).agrees
 
 
 def test_diagnose_with_kanes_equations_on_a_disc_bicycle(tmp_path, capsys):
@@ -249,7 +252,7 @@ def test_diagnose_with_kanes_equations_on_a_disc_bicycle(tmp_path, capsys):
 
 
 def test_diagnose_names_the_contact_model():
-    d = diagnose("thesis", against="thesis-disc", n_states=8)
+    d = diagnose("thesis", against="thesis-disc", n_states=8, tolerances=TOLS)
     assert d.localization.explanation.causes == ("contact",)
     assert d.localization.terms == ("D", "dD dq")
     assert d.declared == (("contact", "thesis", "disc"),)
@@ -282,6 +285,6 @@ def test_diagnose_parser_and_bad_inputs(tmp_path):
     with pytest.raises(ParameterError, match="unknown model 'thesys'.*did you mean 'thesis'"):
         run_diagnose(_args(THESIS_FILE, against="thesys"))
     with pytest.raises(ValueError, match="engines must name at least one engine other than the reference"):
-        diagnose(THESIS_FILE, engines=())
+        diagnose(THESIS_FILE, engines=(), tolerances=TOLS)
     with pytest.raises(ValueError, match="n_states must be an integer >= 4"):
-        diagnose(THESIS_FILE, n_states=1)
+        diagnose(THESIS_FILE, n_states=1, tolerances=TOLS)

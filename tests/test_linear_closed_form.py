@@ -48,10 +48,12 @@ import reference_model.linearize as linearize_module
 from comparisons.judgments.meijaard import MATRICES, closed_form
 from comparisons.judgments.published import MEIJAARD_MATRICES
 from comparisons.stages.linear_check import linear_check
+from comparisons.judgments.tolerances import load_tolerances
 from reference_model import load_model
 from reference_model.linearize import Linearization, linearize
 from shipped_sets import SETS, file_values, import_shipped, shipped, table1
 
+TOLS = load_tolerances()   # the packaged tolerances.toml, read once
 TOL_CANONICAL, TOL_SPEED, TOL_PRINTED, TOL_K = 1e-12, 1e-9, 1e-13, 1e-14
 V = 5.0
 
@@ -139,7 +141,7 @@ def _rows(sec) -> dict:
 
 @pytest.mark.parametrize("name", SETS)
 def test_linear_check_passes_and_its_speeds_are_bicycleparameters(canonical, specs, name):
-    sec = linear_check(specs[name])
+    sec = linear_check(TOLS, specs[name])
     assert sec.title == f"Linearization of {name}Benchmark against the benchmark's closed form"
     rows = _rows(sec)
     assert set(rows) == {*MATRICES, "weave speed", "capsize speed"}
@@ -175,15 +177,15 @@ def _planted(monkeypatch, change):
 ], ids=["K2-sign", "v-scaling"])
 def test_a_planted_linearization_bug_fails_the_check(monkeypatch, specs, bug, failing):
     _planted(monkeypatch, bug)
-    rows = _rows(linear_check(specs["Benchmark"]))
+    rows = _rows(linear_check(TOLS, specs["Benchmark"]))
     assert {q for q, r in rows.items() if r["passed"] is False} == failing
 
 
 def test_thesis_contact_is_not_applicable_and_drag_is_removed_and_said():
-    rows = linear_check("thesis").comparisons
+    rows = linear_check(TOLS, "thesis").comparisons
     assert len(rows) == 1 and rows[0]["passed"] is None
     assert rows[0]["note"].startswith("not applicable: no benchmark counterpart: model.contact")
-    sec = linear_check("thesis-disc")                      # cv = 0.8 kg/m
+    sec = linear_check(TOLS, "thesis-disc")                      # cv = 0.8 kg/m
     assert all(c["passed"] is True for c in sec.comparisons)
     assert "checked with cv = 0" in sec.blocks[0].text
 

@@ -91,15 +91,16 @@ def test_a_declared_limitation_is_not_run_with_its_reason_everywhere(triangle):
     the loader's UnsupportedModel through run_one crashes the stage)."""
     from comparisons.stages.engines import plugin_terms
     from comparisons.stages.faults import fault_entries
+    from comparisons.judgments.tolerances import load_tolerances
     from comparisons.stages.runs import SETUPS, run_one
     from reference_model.scenarios import SCENARIOS
     run = run_one(SETUPS["mujoco"], SCENARIOS["stability-psid10"], triangle)
     assert run.status == "not run" and "not run on this model" in run.message
     assert "A + B >= C" in run.message
-    sec = plugin_terms("mujoco", {}, 4, (triangle,))
+    sec = plugin_terms(load_tolerances(), "mujoco", {}, 4, (triangle,))
     assert sec.comparisons == []            # nothing judged, nothing failed
     assert any("not run on this model" in str(b) for b in sec.blocks)
-    entries = fault_entries("mujoco", triangle)
+    entries = fault_entries(load_tolerances(), "mujoco", triangle)
     assert [e["verdict"] for e in entries] == ["not run"]
     assert "A + B >= C" in entries[0]["evidence"]
 

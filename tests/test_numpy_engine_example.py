@@ -16,9 +16,11 @@ try:   # comparisons/ is being restructured: the judgments moved to comparisons.
     from comparisons.judgments.terms import compare_terms, random_states
 except ImportError:
     from comparisons.judgments.terms import compare_terms, random_states
+from comparisons.judgments.tolerances import load_tolerances
 from engines import EngineSpecError, available_engines, engine_info, load_engine
 from engines.registry import GROUP
 
+TOLS = load_tolerances()   # the packaged tolerances.toml, read once
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "numpy_engine"
 FILE_SPEC = f"{EXAMPLE / 'numpy_bicycle' / 'engine.py'}:NumpyEngine"
 ALL = {"mass_matrix", "inverse_dynamics", "gravity", "generalized_forces", "constraint_jacobian",
@@ -76,7 +78,8 @@ def test_loads_through_its_entry_point(installed, disc):
 @pytest.mark.parametrize("model_name", ("thesis", "disc"))
 def test_correct_engine_conforms_term_by_term(request, states, model_name):
     model = request.getfixturevalue(model_name)
-    results = compare_terms(load_engine("reference", model), load_engine(FILE_SPEC, model), states)
+    results = compare_terms(load_engine("reference", model), load_engine(FILE_SPEC, model), states,
+                            TOLS)
     assert {r.quantity for r in results} == ALL
     for r in results:
         assert r.passed, r.describe()
@@ -85,7 +88,7 @@ def test_correct_engine_conforms_term_by_term(request, states, model_name):
 @pytest.mark.parametrize("bug", sorted(TOUCHES))
 def test_planted_bug_fails_the_terms_it_touches(thesis, states, bug):
     results = compare_terms(load_engine("reference", thesis),
-                            load_engine(FILE_SPEC, thesis, bug=bug), states)
+                            load_engine(FILE_SPEC, thesis, bug=bug), states, TOLS)
     failed = {r.quantity for r in results if not r.passed}
     assert failed == TOUCHES[bug], [r.describe() for r in results]
     # far outside the tolerance, not a near miss

@@ -272,6 +272,54 @@ def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
     assert (out / "figures" / "zigzag_torques.png").is_file() and "Not drawn" not in text
 
 
+def test_the_workers_judge_by_the_given_tolerances(tmp_path, failing_tolerances):
+    """--tolerances reaches the stages in worker processes as a value in their arguments: with
+    every tolerance at 1e-300 (any round-off difference fails it) every judged comparison of
+    Pinocchio's term-by-term stage (a worker's) and of the scenarios (the main process's)
+    fails. Two workers, one inverse scenario, 50 states: ~4 s."""
+    failing = failing_tolerances
+    out = tmp_path / "r"
+    assert main(["run", "--quick", "--scenarios", "check", "--engines", "reference,pinocchio",
+                 "--sections", "terms", "--jobs", "2", "--figures", "none", "--no-html",
+                 "--no-data", "--tolerances", str(failing), "--out", str(out)]) == 1
+    comps = json.loads((out / "summary.json").read_text())["comparisons"]
+    terms = [c for c in comps if c["scenario"].startswith("random-states")]
+    assert len(terms) >= 7 and all(c["passed"] is False for c in terms), terms
+    judged = [c for c in comps if c.get("tolerance") is not None]
+    assert all(c["tolerance"] == 1e-300 for c in judged)
+    assert all(c["passed"] is False for c in judged if c["max_error"]), \
+        [c for c in judged if c["passed"] is not False]
+
+
+def test_every_stage_is_given_the_runs_tolerances():
+    """Every stage function with a ``tolerances`` parameter gets ``Options.tolerances`` itself
+    as its first argument, in the thesis's full run and in a --model run (planted: one stage
+    built without it fails this)."""
+    import dataclasses
+    import inspect
+
+    from comparisons.judgments.tolerances import Tolerance, Tolerances, load_tolerances
+    from comparisons.stages.cases import build_cases, model_spec
+    from comparisons.stages.pipeline import Options, _tasks, select
+    from comparisons.stages.runs import setups_for
+    mine = Tolerances(tuple(dataclasses.replace(t, tolerance=t.tolerance / 2)
+                            for t in load_tolerances().values()), "mine")
+    base = select(None, False, None)
+    runs = [Options(base.scenarios, base.engines, tolerances=mine),
+            Options(base.scenarios, base.engines, True, models=(model_spec("benchmark"),),
+                    tolerances=mine)]
+    given = set()
+    for opts in runs:
+        cases, _ = build_cases(opts.scenarios, opts.models, ())
+        labels = [s.label for s in setups_for(opts.engines)]
+        for t in _tasks(opts, labels, cases, {}):
+            if "tolerances" in inspect.signature(t.func).parameters:
+                assert t.args[0] is mine, t.label
+                given.add(t.func.__name__)
+    assert {"pinocchio_terms", "exudyn_terms", "plugin_terms", "energy_section", "fault_entries",
+            "benchmark_terms", "linear_check"} <= given
+
+
 @pytest.mark.parametrize("args, needle", [
     (["--engines", "reference,bullet"], "unknown engine 'bullet'"),
     (["--scenarios", "zigzag,nope"], "unknown scenario 'nope'"),

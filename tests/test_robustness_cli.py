@@ -36,14 +36,17 @@ def test_negative_speeds_parse(tmp_path, capsys):
     assert out.read_text().count("\n") == 12        # header + 11 speeds
 
 
-def test_a_broken_tolerance_file_in_the_environment_stops_before_the_runs(tmp_path, monkeypatch,
-                                                                          capsys):
+@pytest.mark.parametrize("command", [["run", "--quick"], ["sweep", "--vary", "m3=80:90:2"],
+                                     ["diagnose", "thesis"]])
+def test_a_broken_tolerance_file_stops_before_anything_runs(tmp_path, capsys, command):
+    """``--tolerances`` is read once, first: a malformed file is one line naming the option and
+    the field, exit 2, nothing written (run, sweep and diagnose alike)."""
     bad = tmp_path / "tol.toml"
     bad.write_text("[mass_matrix]\ntolerance = 'tight'\n")
-    monkeypatch.setenv("BICYCLE_XVAL_TOLERANCES", str(bad))
-    assert main(["run", "--quick", "--out", str(tmp_path / "r")]) == 2
+    assert main([*command, "--tolerances", str(bad), "--out", str(tmp_path / "r")]
+                if command[0] != "diagnose" else [*command, "--tolerances", str(bad)]) == 2
     err = _err(capsys)
-    assert len(err) == 1 and "BICYCLE_XVAL_TOLERANCES" in err[0]
+    assert len(err) == 1 and "--tolerances" in err[0] and "mass_matrix" in err[0]
     assert not (tmp_path / "r").exists()
 
 

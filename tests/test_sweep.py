@@ -213,3 +213,98 @@ def test_cli_sweep_writes_the_report(tmp_path, monkeypatch, capsys, tiny, client
     report = (out / "report.md").read_text()
     assert "Broken mass_matrix" in report and (out / "stability.png").exists()
     assert os.path.getsize(out / "agreement.png") > 1000
+
+
+# -- the tolerances travel with the tasks (issue 22) ---------------------------------------------
+
+def _free_port() -> int:
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def remote_scheduler(tmp_path):
+    """A `dask scheduler` and one `dask worker` (no nanny, one thread) started as their own
+    process groups on loopback in a clean environment: no variable of this process reaches the
+    worker but PATH, the path to this checkout's code and its compiled-code cache. Both are ended (their process
+    groups killed) whatever the test does. About 2-3 s to start on the 2-core machine."""
+    import signal
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from reference_model.codegen import CACHE_ENV, cache_root
+    root = Path(__file__).resolve().parents[1]
+    dask = Path(sys.executable).with_name("dask")
+    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(tmp_path),
+           "PYTHONPATH": str(root), "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
+           CACHE_ENV: str(cache_root())}     # the compiled model this process uses (else ~40 s)
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    procs = []
+
+    def start(*argv):
+        procs.append(subprocess.Popen([str(dask), *argv], cwd=root, env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                      start_new_session=True))
+    try:
+        start("scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard")
+        start("worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
+              "--host", "127.0.0.1", "--death-timeout", "30")
+        from distributed import Client
+        with Client(address, timeout="30s") as c:     # waits for the scheduler
+            c.wait_for_workers(1, timeout=30)
+        yield address
+    finally:
+        for p in procs:
+            try:
+                os.killpg(p.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            p.wait(timeout=10)
+
+
+def test_a_remote_dask_worker_judges_by_the_given_tolerances(tmp_path, capsys, remote_scheduler,
+                                                            failing_tolerances):
+    """A sweep sent to a `dask worker` started in another environment, with a --tolerances file
+    that makes every check fail, fails every bicycle (the tolerances are in each task's
+    arguments, not in the worker's environment); the packaged tolerances agree on the same
+    bicycles, under another spec hash (a resume never mixes the two). Two bicycles, Pinocchio's
+    terms at 2 states: ~1 s of work on the worker besides its start."""
+    import json
+    failing = failing_tolerances
+    argv = ["sweep", "--model", "benchmark", "--vary", "m3=80:90:2", "--checks", "terms",
+            "--engines", "pinocchio", "--states", "2", "--scheduler", remote_scheduler,
+            "--no-progress"]
+    assert main([*argv, "--tolerances", str(failing), "--out", str(tmp_path / "fail")]) == 1
+    bad = pd.read_parquet(tmp_path / "fail" / "results.parquet")
+    assert list(bad["status"]) == ["disagree", "disagree"], bad["failures"].tolist()
+    assert (bad["max_error"] > 1e-300).all()
+    assert main([*argv, "--out", str(tmp_path / "ok")]) == 0
+    good = pd.read_parquet(tmp_path / "ok" / "results.parquet")
+    assert list(good["status"]) == ["agree", "agree"]
+    # the same bicycles and states: the same errors, judged differently
+    np.testing.assert_array_equal(bad["max_error"].to_numpy(), good["max_error"].to_numpy())
+    hashes = [json.loads((tmp_path / d / "spec.json").read_text())["hash"] for d in ("fail", "ok")]
+    assert hashes[0] != hashes[1]
+    capsys.readouterr()
+
+
+def test_the_spec_hash_covers_the_tolerance_values(tmp_path, benchmark_params, failing_tolerances):
+    """Other tolerances, another hash; the same tables from another file name, the same hash
+    (the hash is of the values, which spec.json lists)."""
+    from comparisons.judgments.tolerances import TOLERANCES_FILE, load_tolerances
+    from comparisons.stages.sweep_spec import spec_hash
+    copy = tmp_path / "copy.toml"
+    copy.write_text(TOLERANCES_FILE.read_text())
+
+    def spec(tols=None):
+        return make_spec(benchmark_params, varies=["m3=80:90:2"], checks=("terms",),
+                         tolerances=tols)
+    base = spec_hash(spec())
+    assert spec_hash(spec(load_tolerances(copy))) == base
+    failing = load_tolerances(failing_tolerances)
+    assert spec_hash(spec(failing)) != base
+    assert spec().as_json()["tolerances"]["mass_matrix"]["tolerance"] == 1e-12

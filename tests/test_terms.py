@@ -114,10 +114,10 @@ def test_non_finite_output_is_an_infinite_error(thesis):
 
 def test_compare_terms_covers_what_both_provide(thesis):
     ref = load_engine("reference", thesis)
-    results = compare_terms(ref, ref, STATES)
+    results = compare_terms(ref, ref, STATES, TOLS)
     assert [r.quantity for r in results] == list(QUANTITIES)
     assert all(r.passed and r.max_error == 0.0 for r in results)
-    only = compare_terms(ref, ref, STATES, quantities=["gravity", "mass_matrix"])
+    only = compare_terms(ref, ref, STATES, TOLS, quantities=["gravity", "mass_matrix"])
     assert [r.quantity for r in only] == ["gravity", "mass_matrix"]
 
 
@@ -144,5 +144,5 @@ def test_compare_terms_skips_what_one_engine_lacks(thesis):
         def mass_matrix(self, q):
             return self.model.mass_matrix(q)
 
-    results = compare_terms(load_engine("reference", thesis), OnlyM(thesis), STATES)
+    results = compare_terms(load_engine("reference", thesis), OnlyM(thesis), STATES, TOLS)
     assert [r.quantity for r in results] == ["mass_matrix"] and results[0].passed

@@ -4,11 +4,15 @@ Every malformed entry must be refused with a message naming the file, the quanti
 field; each scale divides an absolute error by what its name says (values by hand).
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from comparisons.judgments.tolerances import (TOLERANCES_ENV, TOLERANCES_FILE, Tolerance, ToleranceError,
-                                    load_tolerances)
+import pickle
+
+from comparisons.judgments.tolerances import (TOLERANCES_FILE, Tolerance, ToleranceError,
+                                              Tolerances, load_complete, load_tolerances)
 
 GOOD = 'tolerance = 1e-6\nscale = "absolute"\nreason = "why"\n'
 
@@ -32,13 +36,35 @@ def test_a_good_entry_is_read_exactly(tmp_path):
     assert isinstance(tols["trajectory"].tolerance, float)
 
 
-def test_environment_variable_selects_the_file(tmp_path, monkeypatch):
-    path = tmp_path / "env.toml"
-    path.write_text("[x]\n" + GOOD)
-    monkeypatch.setenv(TOLERANCES_ENV, str(path))
-    assert set(load_tolerances()) == {"x"}
-    monkeypatch.delenv(TOLERANCES_ENV)
-    assert set(load_tolerances()) == set(load_tolerances(TOLERANCES_FILE))
+def test_the_tolerances_are_a_value_that_pickles_and_hashes(tmp_path):
+    """What a stage's Task args and a Dask task carry: equal after a pickle round trip (a worker
+    judges by exactly these), hashable, equal for equal tables whatever the file's name, and
+    no environment variable selects them."""
+    tols = load_tolerances()
+    assert isinstance(tols, Tolerances) and tols == load_tolerances(TOLERANCES_FILE)
+    back = pickle.loads(pickle.dumps(tols))
+    assert back == tols and hash(back) == hash(tols) and back["mass_matrix"] == tols["mass_matrix"]
+    copy = tmp_path / "copy.toml"
+    copy.write_text(TOLERANCES_FILE.read_text())
+    assert load_tolerances(copy) == tols and load_tolerances(copy).source == str(copy)
+    tighter = tmp_path / "tighter.toml"
+    tighter.write_text(TOLERANCES_FILE.read_text().replace(
+        "[mass_matrix]\ntolerance = 1e-12", "[mass_matrix]\ntolerance = 1e-13"))
+    assert load_tolerances(tighter) != tols and load_tolerances(tighter).as_json() != tols.as_json()
+    with pytest.raises(KeyError):
+        tols["no_such_quantity"]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        tols.entries = ()
+
+
+def test_a_user_file_must_have_every_packaged_table(tmp_path):
+    path = tmp_path / "few.toml"
+    path.write_text("[mass_matrix]\n" + GOOD)
+    with pytest.raises(ToleranceError, match=r"lacks \[inverse_dynamics\] \(and \d+ more\)"):
+        load_complete(path)
+    with pytest.raises(ToleranceError, match="no file"):
+        load_complete(tmp_path / "missing.toml")
+    assert load_complete(TOLERANCES_FILE) == load_tolerances()
 
 
 ENTRY = "[x]\n" + GOOD

@@ -35,6 +35,8 @@ def add_compare_trajectory_parser(sub) -> None:
     s.add_argument("--csv", required=True, type=Path, help="the run: documented columns")
     s.add_argument("--label", default=None, help="the engine's name in the output [file stem]")
     s.add_argument("--json", type=Path, default=None, help="also write the verdicts as JSON")
+    from .tolerance_option import add_tolerances_argument
+    add_tolerances_argument(s)
     s.set_defaults(func=cmd_compare_trajectory)
 
 
@@ -94,14 +96,14 @@ def cmd_compare_trajectory(args) -> int:
     from ..judgments.claims import judge_claims
     from ..judgments.convergence import reference_horizon
     from ..judgments.scenario_compare import compare_constraints, compare_forward, compare_inverse
-    from ..judgments.tolerances import load_tolerances
     from ..stages.runs import run_one, SETUPS
+    from .tolerance_option import tolerances_from
 
     sc = get_scenario(args.scenario)
     label = args.label or args.csv.stem
     theirs = read_run(args.csv, sc, label)
     model = load_model(sc.model)
-    tols = load_tolerances()
+    tols = tolerances_from(args)
     ref = run_one(SETUPS["reference"], sc.name)
     comps = []
     if sc.kind == "inverse":

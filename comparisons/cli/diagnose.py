@@ -39,6 +39,8 @@ def add_diagnose_parser(subparsers) -> None:
     s.add_argument("--states", type=int, default=DEFAULT_STATES,
                    help=f"number of deterministic random states [{DEFAULT_STATES}]")
     s.add_argument("--json", type=Path, default=None, help="also write the diagnosis as JSON")
+    from .tolerance_option import add_tolerances_argument
+    add_tolerances_argument(s)
     s.set_defaults(func=run_diagnose)
 
 
@@ -75,7 +77,9 @@ def run_diagnose(args) -> int:
     from .engines import engine_options
     options = {n: engine_options(n, args.engine_options) for n in names} \
         if args.engine_options else None
-    result = diagnose(model, args.against, names, args.states, options=options)
+    from .tolerance_option import tolerances_from
+    result = diagnose(model, args.against, names, args.states, options=options,
+                      tolerances=tolerances_from(args))
     print(result.describe())
     if args.json is not None:
         write_text(args.json, json.dumps(result.to_dict(), indent=1) + "\n")

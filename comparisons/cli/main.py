@@ -7,13 +7,14 @@
     bicycle-xval run [--out DIR] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
                      [--tolerances FILE] [--model NAME|FILE ...] [--scenario-file FILE ...]
     bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn,kane] [--json OUT]
+                          [--tolerances FILE]
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
     bicycle-xval import FILE --from benchmark --out my.toml [--name NAME]
                         [--allow-triangle-violation]
     bicycle-xval export --model NAME|FILE --format benchmark --out PATH
     bicycle-xval sweep --model NAME|FILE --vary NAME=LOW:HIGH:N ... | --sample N --spread P
                        [--seed S] [--engines ...] [--checks terms,eigen,runs] --out DIR
-                       [--scheduler ADDRESS | --workers N]
+                       [--tolerances FILE] [--scheduler ADDRESS | --workers N]
 
 Exit status: 0 success, 1 a run failed (solver failure) or a check did not hold,
 2 usage error (bad option, unknown model or scenario, bad parameter file), always with a
@@ -131,34 +132,13 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_run(args) -> int:
-    import os
-
-    from ..judgments.tolerances import (TOLERANCES_ENV, TOLERANCES_FILE, ToleranceError,
-                                        load_tolerances)
     from ..report.writer import write_report
     from ..stages.pipeline import SelectionError, run_comparison, select
     from ..stages.pool import MAX_WORKERS
     if args.jobs is not None and not 1 <= args.jobs <= MAX_WORKERS:
         raise UsageError(f"--jobs must be between 1 and {MAX_WORKERS}; got {args.jobs}")
-    if args.tolerances is not None:
-        if not args.tolerances.is_file():
-            raise UsageError(f"--tolerances: no file {str(args.tolerances)!r}; copy "
-                             "comparisons/judgments/tolerances.toml and edit it")
-        try:
-            shipped = load_tolerances(TOLERANCES_FILE)
-            mine = load_tolerances(args.tolerances)
-        except ToleranceError as exc:
-            raise UsageError(f"--tolerances: {exc}") from None
-        missing = sorted(set(shipped) - set(mine))
-        if missing:
-            raise UsageError(f"--tolerances: {args.tolerances} lacks [{missing[0]}]"
-                             f"{f' (and {len(missing) - 1} more)' if len(missing) > 1 else ''}; "
-                             "start from a copy of comparisons/judgments/tolerances.toml")
-    elif os.environ.get(TOLERANCES_ENV):
-        try:   # checked before the runs, not after them
-            load_tolerances()
-        except ToleranceError as exc:
-            raise UsageError(f"{TOLERANCES_ENV}: {exc}") from None
+    from .tolerance_option import tolerances_from
+    tolerances = tolerances_from(args)     # read once, checked before the runs
     if args.out.exists() and not args.out.is_dir():
         raise UsageError(f"--out {args.out} is a file; give a folder for the report")
     try:
@@ -174,20 +154,11 @@ def cmd_run(args) -> int:
         raise UsageError(f"--sections: unknown section {unknown[0]!r}; choose from "
                          f"{', '.join(SECTIONS)} (comma-separated), or none for the scenarios only")
     opts = dataclasses.replace(opts, workers=args.jobs, sections=sections,
-                               figures=args.figures or "",
+                               figures=args.figures or "", tolerances=tolerances,
                                engine_options=_run_engine_options(opts.engines, args.engine_options))
     from .bicycles import with_models
     opts = with_models(opts, args.model, args.scenario_file)
-    before = os.environ.get(TOLERANCES_ENV)
-    try:
-        if args.tolerances is not None:   # worker processes inherit it
-            os.environ[TOLERANCES_ENV] = str(args.tolerances.resolve())
-        result = run_comparison(opts, _progress)
-    finally:
-        if before is None:
-            os.environ.pop(TOLERANCES_ENV, None)
-        else:
-            os.environ[TOLERANCES_ENV] = before
+    result = run_comparison(opts, _progress)   # opts.tolerances goes to every stage's args
     _progress("writing the report ...")
     path = write_report(result, args.out, data=not args.no_data, html=not args.no_html,
                         progress=_progress)
@@ -311,8 +282,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "failed, or none [failing with --quick, else all]")
     s.add_argument("--jobs", type=int, default=None,
                    help="worker processes [the machine's cores, never more than the stages]")
-    s.add_argument("--tolerances", type=Path, default=None,
-                   help="a tolerance file replacing comparisons/judgments/tolerances.toml (same tables)")
+    from .tolerance_option import add_tolerances_argument
+    add_tolerances_argument(s)
     from .bicycles import add_run_model_options
     add_run_model_options(s)
     s.set_defaults(func=cmd_run)

@@ -42,6 +42,8 @@ def add_sweep_parser(sub) -> None:
                    help="terms, eigen, runs (comma-separated) [terms,eigen]")
     s.add_argument("--states", type=int, default=8,
                    help="random states per bicycle for the terms [8]")
+    from .tolerance_option import add_tolerances_argument
+    add_tolerances_argument(s)
     s.add_argument("--out", type=Path, required=True, help="output folder")
     s.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="a running Dask scheduler, e.g. tcp://host:8786 [a local cluster]")
@@ -69,9 +71,12 @@ def spec_from_args(args):
         except (EngineSpecError, EngineNotInstalled) as exc:
             raise UsageError(f"--engines {e}: {exc}") from None
     checks = tuple(c.strip() for c in args.checks.split(",") if c.strip())
+    from .tolerance_option import tolerances_from
+    tolerances = tolerances_from(args)      # in the spec: every Dask task, and the hash
     try:
         return make_spec(base, varies=args.vary, sample=args.sample, spread=args.spread,
-                         seed=args.seed, engines=engines, checks=checks, n_states=args.states)
+                         seed=args.seed, engines=engines, checks=checks, n_states=args.states,
+                         tolerances=tolerances)
     except SpecError as exc:
         raise UsageError(str(exc)) from None
 

@@ -2,7 +2,9 @@
 
 Options: ``--engine SPEC`` (repeatable: a registered name, ``package.module:Class`` or
 ``path/file.py:Class``), ``--engine-option key=value`` (repeatable, for every ``--engine``),
-``--model NAME|FILE`` (repeatable), ``--xfails-file F``. The checks live in the test modules of
+``--model NAME|FILE`` (repeatable), ``--xfails-file F``, ``--tolerances FILE`` (read once, in
+`pytest_configure`, into the session's `Conformance.tolerances`; default the packaged
+`comparisons/judgments/tolerances.toml`). The checks live in the test modules of
 this package; `pytest_generate_tests` parametrizes them over (engine, model[, quantity]) for
 what each engine can do, so a check the engine's capabilities do not allow is never collected
 (and the header says which).
@@ -41,6 +43,7 @@ class Conformance:
     specs: list[str]
     models: list[str]
     options: dict
+    tolerances: object = None        # judgments.tolerances.Tolerances: what the checks judge by
     candidates: list[Candidate] = field(default_factory=list)
     xfails: dict[str, str] = field(default_factory=dict)
     _models: dict = field(default_factory=dict)
@@ -75,6 +78,9 @@ def pytest_addoption(parser):
                      "[thesis, thesis-disc, benchmark, general, general-disc]")
     g.addoption("--xfails-file", dest="bx_xfails", default=None, metavar="FILE",
                 help="expected failures: one check id per line, '# reason' after it")
+    g.addoption("--tolerances", dest="bx_tolerances", default=None, metavar="FILE",
+                help="a tolerance file replacing comparisons/judgments/tolerances.toml (same "
+                     "tables)")
 
 
 def read_xfails(path: Path) -> dict[str, str]:
@@ -108,7 +114,13 @@ def pytest_configure(config):
         if not path.is_file():
             raise pytest.UsageError(f"--xfails-file: no file {str(path)!r}")
         xfails = read_xfails(path)
-    config._bx_conformance = Conformance(specs, models, options, xfails=xfails)
+    from ..judgments.tolerances import ToleranceError, load_complete, load_tolerances
+    try:
+        path = config.getoption("bx_tolerances")
+        tolerances = load_tolerances() if path is None else load_complete(path)
+    except ToleranceError as exc:
+        raise pytest.UsageError(f"--tolerances: {exc}") from None
+    config._bx_conformance = Conformance(specs, models, options, tolerances, xfails=xfails)
     config.addinivalue_line("markers", "conformance: a check of the engine conformance suite")
 
 
@@ -164,6 +176,12 @@ def pytest_generate_tests(metafunc):
 @pytest.fixture(scope="session")
 def conformance(request) -> Conformance:
     return _conformance(request.config)
+
+
+@pytest.fixture(scope="session")
+def tolerances(conformance):
+    """The session's tolerances (``--tolerances``, read once in `pytest_configure`)."""
+    return conformance.tolerances
 
 
 @pytest.fixture(scope="session")

@@ -2,7 +2,8 @@
 
 Each check is parametrized by the plugin (`plugin.py`) over the engines and models given on
 the command line and only where the engine's capabilities allow it. Tolerances, each with the
-reason for its size, come from `comparisons/judgments/tolerances.toml`.
+reason for its size, are the session's (the plugin's ``--tolerances FILE``, default
+`comparisons/judgments/tolerances.toml`): the ``tolerances`` fixture.
 """
 
 from __future__ import annotations
@@ -15,9 +16,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from comparisons.judgments.terms import States, compare_term, random_states
-from comparisons.judgments.tolerances import load_tolerances
-
-TOLERANCES = load_tolerances()
 SWEEP_STATES = 200
 #: checks that need capabilities beyond the quantity's own
 NEEDS = {"test_zigzag_torques_and_multipliers": ("mass_matrix", "generalized_forces",
@@ -44,20 +42,20 @@ def _states(s) -> States:
 
 @settings(max_examples=25, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(s=state)
-def test_term_at_hypothesis_states(candidate, reference, quantity, s):
+def test_term_at_hypothesis_states(candidate, reference, quantity, tolerances, s):
     """Each term at hypothesis-generated states: large angles, fast spins, steer near +-pi/2."""
-    res = compare_term(quantity, reference, candidate.engine, _states(s), TOLERANCES[quantity])
+    res = compare_term(quantity, reference, candidate.engine, _states(s), tolerances[quantity])
     assert res.passed, res.describe()
 
 
-def test_term_sweep(candidate, reference, quantity):
+def test_term_sweep(candidate, reference, quantity, tolerances):
     """Each term over 200 deterministic states (reproducible numbers for a report)."""
     res = compare_term(quantity, reference, candidate.engine, random_states(SWEEP_STATES, seed=7),
-                       TOLERANCES[quantity])
+                       tolerances[quantity])
     assert res.passed, res.describe()
 
 
-def test_zigzag_torques_and_multipliers(candidate, conformance):
+def test_zigzag_torques_and_multipliers(candidate, conformance, tolerances):
     """The thesis's zig-zag through the engine's terms in the 13x13 inverse dynamics (the
     engine's own inverse kinematics on its D) gives the reference's rider torques and
     multipliers within [torques] and [multipliers] of tolerances.toml."""
@@ -67,7 +65,7 @@ def test_zigzag_torques_and_multipliers(candidate, conformance):
     ref = run_inverse(conformance.model(candidate.model_name), sc)
     got = eng.run_inverse(sc)
     for name, a, b in (("torques", ref.T, got.T), ("multipliers", ref.lam, got.lam)):
-        tol = TOLERANCES[name]
+        tol = tolerances[name]
         err = float(np.abs(b - a).max()) / tol.normalizer(a)
         k, i = np.unravel_index(int(np.argmax(np.abs(b - a))), a.shape)
         assert err <= tol.tolerance, (f"{name}: error {err:.2e} > {tol.tolerance:g} ({tol.scale}) "
@@ -85,7 +83,7 @@ TRAJECTORIES = {"stability-psid5": None, "replay": 1.0}
 
 
 @pytest.mark.parametrize("scenario", list(TRAJECTORIES))
-def test_trajectory_to_the_meaningful_horizon(candidate, conformance, scenario):
+def test_trajectory_to_the_meaningful_horizon(candidate, conformance, tolerances, scenario):
     # (collected for every --model given; without --model, on DEFAULT_TRAJECTORY_MODELS only)
     """The engine's own forward run against the reference's (DOP853, rtol 1e-11, projection),
     all eight coordinates up to the meaningful horizon (two reference runs 1e-9 rad/s apart in
@@ -105,7 +103,7 @@ def test_trajectory_to_the_meaningful_horizon(candidate, conformance, scenario):
     traj = candidate.engine.simulate(sc)
     assert traj.status != "failed", f"{candidate.spec} failed: {traj.message}"
     err = error_vs_time(ref, traj, coords=COORDINATES, horizon=horizon.t)
-    tol = TOLERANCES["trajectory_conformance"]
+    tol = tolerances["trajectory_conformance"]
     k = int(np.argmax(err["max"]))
     worst = max(COORDINATES, key=lambda c: err[c][k])
     assert err["max"].max() <= tol.tolerance, (

@@ -78,7 +78,7 @@ from .term_checks import (SOLVE_NEEDS, SOURCE_LABEL, TERM_TOLERANCE, TERMS, Bloc
                           TermCheck, check_block, check_terms, engine_terms, extract, model_terms,
                           solve_values, term_blocks)
 from .terms import States, TermComparison, compare_terms, random_states
-from .tolerances import Tolerance, load_tolerances
+from .tolerances import Tolerance
 
 __all__ = [   # the terms and their checks are `term_checks`', named here too (their old home)
     "DEFAULT_SEED", "DEFAULT_STATES", "EXPLAINED", "LOCALIZED", "SOLVE_NEEDS", "SOURCE_LABEL",
@@ -405,7 +405,7 @@ _VERIFIED = 8
 
 def explain(model: Model, states: States, ref: Mapping[str, np.ndarray],
             engine_values: Mapping[str, Mapping[str, np.ndarray]],
-            tolerances: Mapping[str, Tolerance] | None = None,
+            tolerances: Mapping[str, Tolerance],
             copies: Mapping[str, Mapping[str, np.ndarray]] | None = None,
             solves: Mapping[str, SolveValues | None] | None = None,
             shared: ModelCauses | None = None) -> Explanation | None:
@@ -603,7 +603,8 @@ class Localization:
 
 def localize(model: Model, states: States, engines: Sequence[Engine],
              engine_values: Mapping[str, Mapping[str, np.ndarray]] | None = None,
-             truth: Engine | None = None, shared: ModelCauses | None = None) -> Localization:
+             truth: Engine | None = None, shared: ModelCauses | None = None, *,
+             tolerances: Mapping[str, Tolerance]) -> Localization:
     """Compare the model (as the reference engine) with each engine and localize any
     difference. ``engine_values`` (engine name -> `engine_terms`) can be passed in when the same
     engines are compared with many models (the fault suite); otherwise each engine's terms are
@@ -613,8 +614,8 @@ def localize(model: Model, states: States, engines: Sequence[Engine],
     terms are the baseline; the causes are still fitted on the model's sensitivities, which is
     what an engine built from the same parameters shares). ``shared``: the model's candidate
     causes at these states (`ModelCauses`), kept across calls with the same model, states and
-    no ``truth``."""
-    tols = load_tolerances()
+    no ``truth``. ``tolerances``: what every term is judged by (the run's, a value)."""
+    tols = tolerances
     copies: dict[str, dict[str, np.ndarray]] = {}
     solves: dict[str, SolveValues | None] = {}
     if engine_values is not None:
@@ -624,7 +625,7 @@ def localize(model: Model, states: States, engines: Sequence[Engine],
         for e in engines:
             values[e.name], copies[e.name], solves[e.name] = extract(e, states, extras=True)
     ref_engine = truth if truth is not None else load_engine("reference", model)
-    quantities = tuple(c for e in engines for c in compare_terms(ref_engine, e, states))
+    quantities = tuple(c for e in engines for c in compare_terms(ref_engine, e, states, tols))
     ref = model_terms(model, states)
     if truth is not None:
         ref = {**ref, **engine_terms(truth, states)}
@@ -741,12 +742,13 @@ def _declared(a: Model, b: Model) -> tuple[tuple[str, float | str, float | str],
 
 def diagnose(params_file: str | Path, against: str | Path | None = None,
              engines: Sequence[str] = ("pinocchio",), n_states: int = DEFAULT_STATES,
-             seed: int = DEFAULT_SEED, options: Mapping[str, Mapping] | None = None) -> Diagnosis:
+             seed: int = DEFAULT_SEED, options: Mapping[str, Mapping] | None = None, *,
+             tolerances: Mapping[str, Tolerance]) -> Diagnosis:
     """The reference model of ``params_file`` (a .toml file or a named model) against the
     engines built from the same file (``against=None``: adapters and engines must agree) or
     from ``against`` (a named model or a file): which terms differ, at which entries, and the
     parameter (hence body) or structural cause that best explains it, with its estimated value
-    difference. A bad file raises `ParameterError`; an unknown engine or too few states
+    difference, every term judged by ``tolerances``. A bad file raises `ParameterError`; an unknown engine or too few states
     ValueError."""
     engines = tuple(engines)
     if not engines or "reference" in engines:
@@ -763,9 +765,11 @@ def diagnose(params_file: str | Path, against: str | Path | None = None,
     if against_engine:   # the user's engine against another engine, same parameters
         other = load_engine(str(against), model)
         return Diagnosis(str(params_file), f"engine {against}", engines, n_states,
-                         localize(model, states, built, truth=other), (), not_run)
+                         localize(model, states, built, truth=other,
+                                          tolerances=tolerances), (), not_run)
     return Diagnosis(str(params_file), None if against is None else str(against), engines,
-                     n_states, localize(model, states, built), _declared(model, truth), not_run)
+                     n_states, localize(model, states, built, tolerances=tolerances),
+                     _declared(model, truth), not_run)
 
 
 def _build(engines: Sequence[str], model: Model, options) -> tuple[list[Engine], tuple[tuple[str, str], ...]]:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -35,6 +35,7 @@ from reference_model.params import CONTACT_MODELS
 from .diagnose import (DEFAULT_SEED, EXPLAINED, Localization, engine_terms, format_localization,
                        localize)
 from .terms import random_states
+from .tolerances import Tolerance
 
 DEFAULT_FAULT_STATES = 16
 
@@ -236,9 +237,11 @@ def trajectory_result(fault: Fault, model: Model, engine, faulty: Model | None =
 
 def run_fault_suite(engines: Sequence[str] = ("pinocchio",), n_states: int = DEFAULT_FAULT_STATES,
                     base: str = "thesis", faults: Sequence[str] | None = None,
-                    seed: int = DEFAULT_SEED) -> list[FaultResult]:
+                    seed: int = DEFAULT_SEED, *,
+                    tolerances: Mapping[str, Tolerance]) -> list[FaultResult]:
     """Run every fault (or the named ones) against engines built from the correct ``base``
-    model. The engines' terms are evaluated once and shared by every fault."""
+    model, judged by ``tolerances``. The engines' terms are evaluated once and shared by every
+    fault."""
     chosen = list(FAULTS) if faults is None else list(faults)
     unknown = [f for f in chosen if f not in FAULTS]
     if unknown:
@@ -251,7 +254,7 @@ def run_fault_suite(engines: Sequence[str] = ("pinocchio",), n_states: int = DEF
     results = []
     for fid in chosen:
         fault = FAULTS[fid]
-        loc = localize(fault.inject(model), states, built, values)
+        loc = localize(fault.inject(model), states, built, values, tolerances=tolerances)
         result = judge(fault, loc, tuple(engines), observable, model.params)
         runners = [e for e in built if e.supports("simulate")]
         if not result.observable and runners:   # look for it in the forward run instead
@@ -261,9 +264,10 @@ def run_fault_suite(engines: Sequence[str] = ("pinocchio",), n_states: int = DEF
 
 
 def unfaulted(engines: Sequence[str] = ("pinocchio",), n_states: int = DEFAULT_FAULT_STATES,
-              base: str = "thesis", seed: int = DEFAULT_SEED) -> Localization:
+              base: str = "thesis", seed: int = DEFAULT_SEED, *,
+              tolerances: Mapping[str, Tolerance]) -> Localization:
     """The control: the correct model against the same engines (must agree)."""
     model = load_model(base)
     states = random_states(n_states, seed=seed)
     built = [load_engine(name, model) for name in engines]
-    return localize(model, states, built)
+    return localize(model, states, built, tolerances=tolerances)

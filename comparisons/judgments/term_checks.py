@@ -22,7 +22,7 @@ from engines.base import Engine
 from reference_model import COORDINATES, Model
 
 from .terms import States, entry_name
-from .tolerances import Tolerance, load_tolerances
+from .tolerances import Tolerance
 
 __all__ = [
     "COPY_SOURCE", "SOLVE_NEEDS", "SOURCE_LABEL", "TERMS", "TERM_TOLERANCE", "Block", "SolveValues",
@@ -192,11 +192,11 @@ class Block:
 
 
 def term_blocks(ref: Mapping[str, np.ndarray], engine_values: Mapping[str, Mapping[str, np.ndarray]],
-                tolerances: Mapping[str, Tolerance] | None = None,
+                tolerances: Mapping[str, Tolerance],
                 copies: Mapping[str, Mapping[str, np.ndarray]] | None = None,
                 solves: Mapping[str, SolveValues | None] | None = None) -> list[Block]:
     """Every compared array of every engine (`Block`), its terms first."""
-    tols = tolerances or load_tolerances()
+    tols = tolerances
     scale = {t: _scales(t, ref, tols[TERM_TOLERANCE[t][0]])
              for t in {t for v in engine_values.values() for t in v}}
     out = []
@@ -278,6 +278,6 @@ def check_block(b: Block) -> TermCheck:
 
 
 def check_terms(ref: Mapping[str, np.ndarray], engine_values: Mapping[str, Mapping[str, np.ndarray]],
-                tolerances: Mapping[str, Tolerance] | None = None) -> list[TermCheck]:
+                tolerances: Mapping[str, Tolerance]) -> list[TermCheck]:
     """Every term each engine provides against the model's (``ref`` from `model_terms`)."""
     return [check_block(b) for b in term_blocks(ref, engine_values, tolerances)]

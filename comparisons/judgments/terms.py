@@ -7,6 +7,7 @@ Qv - Qgrav), gravity, the generalised forces, D, dD dq or the constrained accele
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,7 +15,7 @@ import numpy as np
 from engines.base import Engine
 from reference_model import CONSTRAINT_NAMES, COORDINATES, TORQUE_NAMES
 
-from .tolerances import Tolerance, load_tolerances
+from .tolerances import Tolerance
 
 QUANTITIES = ("mass_matrix", "inverse_dynamics", "gravity", "generalized_forces",
               "constraint_jacobian", "constraint_bias", "forward_acceleration")
@@ -118,9 +119,10 @@ def _terms(engine: Engine, quantity: str, s: States, k: int) -> list[np.ndarray]
 
 
 def compare_term(quantity: str, a: Engine, b: Engine, states: States,
-                 tolerance: Tolerance | None = None) -> TermComparison:
-    """Compare one quantity of engines a (the reference side) and b at every state."""
-    tol = tolerance or load_tolerances()[quantity]
+                 tolerance: Tolerance) -> TermComparison:
+    """Compare one quantity of engines a (the reference side) and b at every state, judged by
+    ``tolerance`` (the run's entry for ``quantity``)."""
+    tol = tolerance
     A = np.asarray(_evaluate(a, quantity, states), dtype=float)
     B = np.asarray(_evaluate(b, quantity, states), dtype=float)
     worst = (-1.0, 0, (0,), 0.0)
@@ -137,8 +139,10 @@ def compare_term(quantity: str, a: Engine, b: Engine, states: States,
                           bool(err <= tol.tolerance), k, _entry_name(quantity, idx), len(states))
 
 
-def compare_terms(a: Engine, b: Engine, states: States, quantities=None) -> list[TermComparison]:
-    """Every quantity both engines provide (or the given subset), in a fixed order."""
-    tols = load_tolerances()
+def compare_terms(a: Engine, b: Engine, states: States, tolerances: Mapping[str, Tolerance],
+                  quantities=None) -> list[TermComparison]:
+    """Every quantity both engines provide (or the given subset), in a fixed order, each
+    judged by its entry in ``tolerances``."""
+    tols = tolerances
     qs = [q for q in (quantities or QUANTITIES) if a.supports(q) and b.supports(q)]
     return [compare_term(q, a, b, states, tols[q]) for q in qs]

@@ -95,7 +95,6 @@ def write_sweep_report(spec, result) -> dict:
     by status and the report's path."""
     import pandas as pd
 
-    from ..judgments.tolerances import load_tolerances
     out = Path(result.out)
     frame = pd.read_parquet(result.results)
     counts = summarize(frame)
@@ -107,7 +106,9 @@ def write_sweep_report(spec, result) -> dict:
            "inertias congruence-scaled, physical by construction)")
     lines += [f"Bicycles: {inline(how)}. Contact {spec.contact}. Engines "
               f"{inline(', '.join(spec.engines))} against the reference; checks {', '.join(spec.checks)}; {spec.n_states} random "
-              "states per bicycle for the terms.", "",
+              "states per bicycle for the terms, judged by the tolerances of "
+              f"{inline(spec.tolerances.source or 'the packaged tolerances.toml')} (their "
+              "values are in `spec.json` and the hash).", "",
               f"**{counts['agree']} agree, {counts['disagree']} disagree, {counts['failed']} "
               f"failed, {counts['invalid']} invalid.** Every row: `results.parquet` (columns: "
               "`comparisons/stages/sweep_task.py`).", ""]
@@ -116,7 +117,7 @@ def write_sweep_report(spec, result) -> dict:
         lines += [f"Time per bicycle on its worker: median {np.nanmedian(times):.3f} s, max "
                   f"{np.nanmax(times):.3f} s; total {np.nansum(times):.1f} s of work.", ""]
     if "terms" in spec.checks and axes:
-        tol = max(t.tolerance for t in load_tolerances().values())
+        tol = max(t.tolerance for t in spec.tolerances.values())
         write_bytes(out / "agreement.png", png_bytes(agreement_figure(frame, axes, tol)))
         lines += ["## Agreement map", "", "![agreement](agreement.png)", ""]
     if "eigen" in spec.checks and axes:

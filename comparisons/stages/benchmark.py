@@ -79,7 +79,7 @@ from ..judgments.convergence import (DEFAULT_STEPS, ConvergenceStudy, Horizon, c
                                      error_vs_time, reference_horizon, reference_run)
 from ..judgments.energy import energy_drift
 from ..judgments.terms import States, compare_terms, random_states
-from ..judgments.tolerances import load_tolerances
+from ..judgments.tolerances import Tolerances
 from .results import Section
 
 MODEL = "benchmark"
@@ -154,7 +154,7 @@ def run_manoeuvres(model: Model | None = None, names: Sequence[str] = MANOEUVRES
     return [benchmark_manoeuvre(n, builds, step, twins) for n in names]
 
 
-def benchmark_terms(quick: bool) -> Section:
+def benchmark_terms(tolerances: Tolerances, quick: bool) -> Section:
     """Pinocchio and Exudyn's tree against the reference at random states and M upright."""
     sec = Section("benchmark terms")
     model = load_model(MODEL)
@@ -173,7 +173,7 @@ def benchmark_terms(quick: bool) -> Section:
         n = n_pin if label == "pinocchio" else n_exu
         for states, where, quantities in ((random_states(n, seed=7), f"random-states-{n}", None),
                                           (upright, "upright", ("mass_matrix",))):
-            for r in compare_terms(ref, eng, states, quantities):
+            for r in compare_terms(ref, eng, states, tolerances, quantities):
                 rows.append((label, where, r.quantity, f"{r.max_error:.1e}", f"{r.tolerance:.0e}",
                              "pass" if r.passed else "FAIL", r.worst_entry))
                 sec.comparisons.append({
@@ -204,8 +204,7 @@ def _first_past(err: dict) -> str:
     return f"{max(COORDINATES, key=lambda c: err[c][i])} at {err['t'][i]:.2f} s"
 
 
-def _manoeuvre_part(sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None:
-    tols = load_tolerances()
+def _manoeuvre_part(tols: Tolerances, sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None:
     c_tol = tols["constraint_residual"].tolerance
     drift_tol = tols["iftomm_energy_drift"].tolerance
     sec.heading("IFToMM uncontrolled bicycle: reference against Exudyn")
@@ -305,7 +304,7 @@ def _outcome_part(sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None
                "how"), rows)
 
 
-def _nonlinear_part(sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None:
+def _nonlinear_part(tols: Tolerances, sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None:
     sec.heading("Nonlinear against linear")
     sec.text(
         "Eigenvalues identified from the nonlinear runs (matrix pencil on theta and gamma, 0.04 s "
@@ -340,7 +339,7 @@ def _nonlinear_part(sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> No
                      "pass" if ok else "FAIL"))
     sec.table(("scenario", "engine", "mode", "a [rad]", "fitted [1/s]", "linear [1/s]",
                "rel. deviation", "tolerance", "verdict"), rows)
-    fit_tol = load_tolerances()["benchmark_weave_fit"].tolerance
+    fit_tol = tols["benchmark_weave_fit"].tolerance
     sec.text("Exudyn's weave fits on the IFToMM runs against the reference's fit on the same run "
              f"(the nonlinearity cancels); tolerance {fit_tol:.0e} relative, the O((omega h)^2) "
              "error of the integrator at h = 1e-3:")
@@ -397,14 +396,13 @@ def _convergence_part(sec: Section, model: Model, study: ConvergenceStudy) -> No
         "reason": study.verdict_reason})
 
 
-def _eigenvalue_part(sec: Section, model: Model) -> None:
+def _eigenvalue_part(tols: Tolerances, sec: Section, model: Model) -> None:
     """Linear eigenvalues and critical speeds against Meijaard et al. (2007) Table 2, and the
     eigenvalues-against-speed figure."""
     from reference_model.linearize import capsize_speed, eigenvalues, weave_speed
     from ..judgments.eigenvalues import eigenvalue_curves
     from ..judgments.published import (MEIJAARD_CAPSIZE_SPEED, MEIJAARD_TABLE2,
                                        MEIJAARD_WEAVE_SPEED, table2_eigenvalues)
-    tols = load_tolerances()
     err, worst = 0.0, "-"
     for v in MEIJAARD_TABLE2:
         e = float(np.abs(eigenvalues(model, float(v)) - table2_eigenvalues(v)).max())
@@ -438,8 +436,8 @@ def _eigenvalue_part(sec: Section, model: Model) -> None:
     sec.figure("benchmark_eigenvalues.png", "eigenvalues", **eigenvalue_curves(model, grid))
 
 
-def benchmark_section(quick: bool, runs: list[ManoeuvreRuns], terms: Section,
-                      convergence: ConvergenceStudy | None) -> Section:
+def benchmark_section(tolerances: Tolerances, quick: bool, runs: list[ManoeuvreRuns],
+                      terms: Section, convergence: ConvergenceStudy | None) -> Section:
     """The benchmark bicycle's section of the report (module docstring) from its stages'
     results: terms, the IFToMM manoeuvres on the reference and Exudyn, physics, nonlinear
     against linear, Exudyn's convergence (full runs only), Table 2 and the eigenvalue figure."""
@@ -448,10 +446,10 @@ def benchmark_section(quick: bool, runs: list[ManoeuvreRuns], terms: Section,
     model = load_model(MODEL)
     sec.blocks += terms.blocks
     sec.comparisons += terms.comparisons
-    _manoeuvre_part(sec, model, runs)
+    _manoeuvre_part(tolerances, sec, model, runs)
     _outcome_part(sec, model, runs)
-    _nonlinear_part(sec, model, runs)
+    _nonlinear_part(tolerances, sec, model, runs)
     if convergence is not None:
         _convergence_part(sec, model, convergence)
-    _eigenvalue_part(sec, model)
+    _eigenvalue_part(tolerances, sec, model)
     return sec

@@ -28,7 +28,7 @@ from ..judgments.convergence import (DEFAULT_STEPS, convergence_study, error_vs_
                                      reference_horizon, reference_run)
 from ..judgments.energy import describe_drift, energy_drifts, free_roll_model
 from ..judgments.terms import compare_terms, random_states
-from ..judgments.tolerances import load_tolerances
+from ..judgments.tolerances import Tolerances
 from .results import Figure, Section
 
 EXUDYN_STEP = 1e-3
@@ -69,8 +69,8 @@ TERM_HEADER = ("model", "quantity", "max error", "tolerance", "verdict", "worst 
 THESIS_MODELS = ("thesis", "thesis-disc")
 
 
-def _terms_on_models(sec: Section, spec: str, label: str, options: dict, states,
-                     n_states: int, models=THESIS_MODELS) -> tuple[list[tuple], dict]:
+def _terms_on_models(tolerances: Tolerances, sec: Section, spec: str, label: str, options: dict,
+                     states, n_states: int, models=THESIS_MODELS) -> tuple[list[tuple], dict]:
     """``spec``'s declared terms against the reference on each of ``models`` (named models or
     parameter files; rows, comparisons into ``sec``). A model the engine cannot represent (a
     declared limitation) is a 'not run' row with the reason; an engine that raises otherwise
@@ -92,30 +92,31 @@ def _terms_on_models(sec: Section, spec: str, label: str, options: dict, states,
                                     "tolerance": None, "passed": False, "localized_to": why})
             continue
         built[name] = ref, eng = load_engine("reference", model), eng
-        rows += _term_rows(sec, compare_terms(ref, eng, states), model.name, ["reference", label],
+        rows += _term_rows(sec, compare_terms(ref, eng, states, tolerances), model.name, ["reference", label],
                            f"random-states-{n_states}", (model.name,))
     return rows, built
 
 
-def pinocchio_terms(n_states: int) -> Section:
+def pinocchio_terms(tolerances: Tolerances, n_states: int) -> Section:
     sec = Section("Reference vs Pinocchio, term by term")
     sec.text(f"At {n_states} deterministic states (large lean, steer near ±π/2, rates up to "
              "20 rad/s); errors relative to the scale each tolerance names "
              "(`comparisons/judgments/tolerances.toml`).")
     states = random_states(n_states, seed=7)
-    rows, built = _terms_on_models(sec, "pinocchio", "pinocchio", {}, states, n_states)
+    rows, built = _terms_on_models(tolerances, sec, "pinocchio", "pinocchio", {}, states, n_states)
     sec.table(TERM_HEADER, rows)
     ref, pin = built["thesis"]
     M_ref = ref.mass_matrix(states.q)
     diff = np.abs(M_ref - pin.mass_matrix(states.q)).max(axis=0) / np.abs(M_ref).max()
     sec.figure("mass_matrix_error_pinocchio.png", "matrix_error", relative=diff,
-               labels=list(COORDINATES), tolerance=1e-12,
+               labels=list(COORDINATES), tolerance=tolerances["mass_matrix"].tolerance,
                title="mass matrix: reference vs Pinocchio, max over the states",
                colorbar="log10 max |M_ref - M_pin| / max|M|")
     return sec
 
 
-def plugin_terms(spec: str, options: dict, n_states: int, models=THESIS_MODELS) -> Section:
+def plugin_terms(tolerances: Tolerances, spec: str, options: dict, n_states: int,
+                 models=THESIS_MODELS) -> Section:
     """An engine term by term on each of ``models`` (default: the thesis bicycle on both
     contact models; a user's bicycle with ``--model``) where it can represent them: the
     quantities it declares."""
@@ -126,20 +127,20 @@ def plugin_terms(spec: str, options: dict, n_states: int, models=THESIS_MODELS) 
     sec.text(f"`{spec}`{' with ' + str(options) if options else ''} at {n_states} deterministic "
              "states (large lean, steer near ±π/2, rates up to 20 rad/s), the quantities it "
              "declares; errors relative to the scale each tolerance names.")
-    rows, _ = _terms_on_models(sec, spec, label, options, random_states(n_states, seed=7),
-                               n_states, models)
+    rows, _ = _terms_on_models(tolerances, sec, spec, label, options,
+                               random_states(n_states, seed=7), n_states, models)
     sec.table(TERM_HEADER, rows)
     return sec
 
 
-def exudyn_terms(n_states: int) -> Section:
+def exudyn_terms(tolerances: Tolerances, n_states: int) -> Section:
     """The terms Exudyn's kinematic tree provides (M, and Qv + Qgrav + Qaero + S T)."""
     sec = Section("Reference vs Exudyn kinematic tree, term by term")
     sec.text(f"At {n_states} deterministic states, `thesis-disc` (the terms do not depend on the "
              "contact model): M from Exudyn's ComputeMassMatrix in the thesis's joint coordinates.")
     model = load_model("thesis-disc")
     ref, exu = load_engine("reference", model), load_engine("exudyn", model, build="tree")
-    rows = _term_rows(sec, compare_terms(ref, exu, random_states(n_states, seed=7)), model.name,
+    rows = _term_rows(sec, compare_terms(ref, exu, random_states(n_states, seed=7), tolerances), model.name,
                       ["reference", "exudyn-tree"], f"random-states-{n_states}")
     sec.table(("quantity", "max error", "tolerance", "verdict", "worst entry"), rows)
     return sec
@@ -346,7 +347,7 @@ def _slug(name: str) -> str:
 
 # -- energy drift ----------------------------------------------------------------------------
 
-def energy_section(model: str = "thesis-disc") -> Section:
+def energy_section(tolerances: Tolerances, model: str = "thesis-disc") -> Section:
     """The energy drift of a torque- and drag-free roll of ``model`` (default thesis-disc; a
     user's bicycle with ``--model``) on the reference and Exudyn's builds."""
     sec = Section("Energy drift, torque-free and drag-free (IFToMM: 100 (Emax - Emin) / E0)"
@@ -354,7 +355,7 @@ def energy_section(model: str = "thesis-disc") -> Section:
     free = free_roll_model(load_model(model))
     scenario, start = _free_roll_on(model, free)
     rows = energy_drifts(free, scenario, step=EXUDYN_STEP)
-    tol = load_tolerances()["energy_drift"]
+    tol = tolerances["energy_drift"]
     sec.text(f"Free roll from {start} for 1 s, cv = 0, no torques; potential energy zero at "
              "the ground.",
              f"Tolerance {tol.tolerance:g} % (`tolerances.toml` [energy_drift]: {tol.reason})")

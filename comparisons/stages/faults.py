@@ -21,9 +21,10 @@ def fault_base(engine: str) -> str:
     return "thesis" if "thesis" in getattr(resolve(engine)[0], "contacts", ()) else "thesis-disc"
 
 
-def fault_entries(engine: str, model: str | None = None, n_states: int | None = None
-                  ) -> list[dict]:
-    """The fault suite against one engine (a stage: worker processes call it). Pinocchio
+def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None,
+                  n_states: int | None = None) -> list[dict]:
+    """The fault suite against one engine, judged by ``tolerances`` (a stage: worker processes
+    call it). Pinocchio
     computes every term, so every fault must be detected and localized on it; the Exudyn tree
     gives only M and the generalized forces, and MuJoCo M, the inverse dynamics and gravity, so
     a fault confined to D and dD dq (the contact switch) is not observable there (MuJoCo has no
@@ -38,7 +39,8 @@ def fault_entries(engine: str, model: str | None = None, n_states: int | None = 
     name = load_model(base).name
     kwargs = {} if n_states is None else {"n_states": n_states}
     try:
-        results = run_fault_suite(engines=(engine,), base=base, **kwargs)
+        results = run_fault_suite(engines=(engine,), base=base, tolerances=tolerances,
+                                  **kwargs)
     except UnsupportedModel as exc:   # the engine cannot represent this bicycle: declared
         return [{"fault": "-", "engine": engine, "model": name, "detected": None,
                  "localized_to": "-", "expected": "-", "correct": None, "observable": False,
@@ -72,8 +74,8 @@ def fault_section(entries: list[dict]) -> Section:
     return sec
 
 
-def localization_lines(comparisons, setups: dict, specs: dict | None = None
-                       ) -> list[tuple[str, str]]:
+def localization_lines(tolerances: Tolerances, comparisons, setups: dict,
+                       specs: dict | None = None) -> list[tuple[str, str]]:
     """For every (model, engine) whose terms or inverse dynamics failed a tolerance: a heading
     and the localization (`diagnose.localize`): which terms, which entries, and the parameter
     or structural cause (with its body) that best explains the difference. Empty when
@@ -95,6 +97,6 @@ def localization_lines(comparisons, setups: dict, specs: dict | None = None
             built = setups[engine].build(model)
         except (UnsupportedModel, ValueError, OSError):   # nothing to localize against
             continue
-        loc = localize(model, random_states(16, seed=11), [built])
+        loc = localize(model, random_states(16, seed=11), [built], tolerances=tolerances)
         out.append((f"{model_name}: reference vs {engine}", loc.describe()))
     return out

@@ -1,6 +1,6 @@
 """A model's linearization against the benchmark's closed form (``bicycle-xval run --model``).
 
-    section = linear_check(spec)        # a stage: spec as load_model takes it
+    section = linear_check(tolerances, spec)   # a stage: spec as load_model takes it
 
 The judgment is `judgments.linear_check.linear_benchmark_check` (the project's exact
 linearization against Meijaard et al. 2007, Appendix A, from the model's own Table 1 values),
@@ -16,7 +16,7 @@ from __future__ import annotations
 from reference_model import load_model
 
 from ..judgments.linear_check import LinearCheck, SpeedCheck, linear_benchmark_check
-from ..judgments.tolerances import load_tolerances
+from ..judgments.tolerances import Tolerances
 from .results import Section, num
 from .stability import SPEED_RANGE
 
@@ -26,10 +26,10 @@ __all__ = ["ENGINES", "linear_check", "linear_check_section"]
 ENGINES = ["linearize", "closed form (Meijaard 2007)"]
 
 
-def linear_check(spec: str) -> Section:
-    """The section of the model ``spec`` (a stage; module docstring)."""
+def linear_check(tolerances: Tolerances, spec: str) -> Section:
+    """The section of the model ``spec`` judged by ``tolerances`` (a stage; module docstring)."""
     model = load_model(spec)
-    return linear_check_section(linear_benchmark_check(model, load_tolerances(), SPEED_RANGE))
+    return linear_check_section(linear_benchmark_check(model, tolerances, SPEED_RANGE))
 
 
 def _speed(v: float | None) -> str:

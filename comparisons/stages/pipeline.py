@@ -44,6 +44,7 @@ from engines.runs import Run
 
 from .. import provenance
 from ..judgments.claims import judge_claims
+from ..judgments.tolerances import Tolerances, load_tolerances
 from ..judgments.summary import summary_table
 from .pool import Task, run_tasks
 from .results import FIGURE_POLICIES, Figure, Section, Text
@@ -75,6 +76,9 @@ class Options:
     sections: tuple[str, ...] = SECTIONS   # which engine sections run besides the scenarios
     figures: str = ""                 # FIGURE_POLICIES; "" = 'failing' with --quick, else 'all'
     not_installed: tuple[tuple[str, str], ...] = ()   # default engines whose extra is missing: why
+    #: what every stage judges by (--tolerances, read once by the CLI): passed, as a value, in
+    #: each Task's args, so a worker process never reads a file or an environment variable
+    tolerances: Tolerances = field(default_factory=load_tolerances)
 
     @property
     def figure_policy(self) -> str:
@@ -211,19 +215,19 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
         tasks += _model_section_tasks(opts, m)
     if opts.models:   # the thesis's and the benchmark's own sections: the run without --model
         return tasks
-    quick = opts.quick
+    quick, tols = opts.quick, opts.tolerances
     want = set(opts.sections)
     if "pinocchio" in opts.engines and "terms" in want:
         n = 50 if quick else 200
-        tasks.append(Task("pinocchio-terms", engines.pinocchio_terms, (n,), 1.5,
+        tasks.append(Task("pinocchio-terms", engines.pinocchio_terms, (tols, n), 1.5,
                           "Pinocchio term by term"))
     if "faults" in want:
         for e in faults.FAULT_ENGINES:
             if e in opts.engines:
-                tasks.append(Task(("faults", e), faults.fault_entries, (e,), faults.FAULT_COST[e],
+                tasks.append(Task(("faults", e), faults.fault_entries, (tols, e), faults.FAULT_COST[e],
                                   f"fault injection on {faults.FAULT_LABELS[e]}"))
     if "exudyn" in opts.engines and "terms" in want:
-        tasks.append(Task("exudyn-terms", engines.exudyn_terms, (20 if quick else 100,), 1.0,
+        tasks.append(Task("exudyn-terms", engines.exudyn_terms, (tols, 20 if quick else 100), 1.0,
                           "Exudyn tree term by term"))
     if "exudyn" in opts.engines and "exudyn" in want:
         for n in (engines.QUICK_FORWARD if quick else engines.FORWARD):
@@ -231,11 +235,12 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
                               6.0 if n == "replay" else 2.5, f"Exudyn trajectories: {n}"))
         tasks.append(Task("exudyn-convergence", engines.exudyn_convergence, (quick,),
                           5.0 if quick else 8.0, "Exudyn convergence order"))
-        tasks.append(Task("energy", engines.energy_section, (), 2.0, "energy drift"))
+        tasks.append(Task("energy", engines.energy_section, (tols,), 2.0, "energy drift"))
     for spec in opts.engines:
         if spec not in OWN_TERM_STAGES and "terms" in want:   # kane, mujoco, a plugin
             tasks.append(Task(("plugin-terms", spec), engines.plugin_terms,
-                              (spec, opts.options_for().get(spec, {}), 50 if quick else 200), 1.5,
+                              (tols, spec, opts.options_for().get(spec, {}), 50 if quick else 200),
+                              1.5,
                               f"{spec} term by term"))
     if "mujoco" in opts.engines and "contact" in want:
         tasks.append(Task("mujoco-contact", mujoco_contact.mujoco_contact, (quick,),
@@ -245,7 +250,7 @@ def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task
             tasks.append(Task("mujoco-claims", mujoco_contact.claims_on_disc, (stab,),
                               0.4 * len(stab), "MuJoCo: the stability claims on thesis-disc"))
     if "pinocchio" in opts.engines and "exudyn" in opts.engines and "benchmark" in want:
-        tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (quick,), 1.5,
+        tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (tols, quick), 1.5,
                           "benchmark terms"))
         for n in benchmark.MANOEUVRES:
             builds = benchmark.quick_builds(n) if quick else benchmark.BUILDS
@@ -270,24 +275,26 @@ def _model_section_tasks(opts: Options, m) -> list[Task]:
     model: <reason>')."""
     from . import engines, faults, linear_check, mujoco_contact
     quick, want = opts.quick, set(opts.sections)
-    tasks = [Task(("linear-check", m.spec), linear_check.linear_check, (m.spec,), 0.1,
+    tols = opts.tolerances
+    tasks = [Task(("linear-check", m.spec), linear_check.linear_check, (tols, m.spec), 0.1,
                   f"{m.name}: linearization vs the closed form")]
     if "terms" in want:
         for spec in opts.engines:
             if spec != "reference":
                 tasks.append(Task(("model-terms", spec, m.spec), engines.plugin_terms,
-                                  (spec, opts.options_for().get(spec, {}), 50 if quick else 200,
-                                   (m.spec,)), 1.0, f"{m.name}: {spec} term by term"))
+                                  (tols, spec, opts.options_for().get(spec, {}),
+                                   50 if quick else 200, (m.spec,)), 1.0,
+                                  f"{m.name}: {spec} term by term"))
     if "faults" in want:
         for e in faults.FAULT_ENGINES:
             if e in opts.engines and m.contact in _engine_contacts(e):
-                tasks.append(Task(("faults", e, m.spec), faults.fault_entries, (e, m.spec),
+                tasks.append(Task(("faults", e, m.spec), faults.fault_entries, (tols, e, m.spec),
                                   faults.FAULT_COST[e], f"{m.name}: fault injection on "
                                                         f"{faults.FAULT_LABELS[e]}"))
     if "exudyn" in opts.engines and "exudyn" in want:
         tasks.append(Task(("exudyn-convergence", m.spec), engines.exudyn_convergence,
                           (quick, m.spec), 3.0, f"{m.name}: Exudyn convergence order"))
-        tasks.append(Task(("energy", m.spec), engines.energy_section, (m.spec,), 2.0,
+        tasks.append(Task(("energy", m.spec), engines.energy_section, (tols, m.spec), 2.0,
                           f"{m.name}: energy drift"))
     if "mujoco" in opts.engines and "contact" in want and m.contact == "disc":
         tasks.append(Task(("mujoco-contact", m.spec), mujoco_contact.mujoco_contact,
@@ -377,7 +384,8 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
     rows, checks, corrections = scenarios.reference_rows(names, runs, cases)
     from reference_model import load_model
     by_label = {s.label: s for s in setups}
-    sections = [scenarios.compare_scenarios(names, by_label, runs, horizons, cases)]
+    sections = [scenarios.compare_scenarios(opts.tolerances, names, by_label, runs, horizons,
+                                              cases)]
     # the thesis's claims are about the thesis bicycle: judged on its scenarios only
     thesis_names = [n for n in names if n in opts.scenarios and cases[n].model == "thesis"]
     claims = judge_claims(runs, labels, load_model("thesis"),
@@ -421,7 +429,8 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         if broken:
             sections += broken
         else:
-            sections.append(benchmark.benchmark_section(opts.quick, [v for v, _ in bench_runs],
+            sections.append(benchmark.benchmark_section(opts.tolerances, opts.quick,
+                                                        [v for v, _ in bench_runs],
                                                         terms, conv))
     for m in opts.models:
         add(("linear-check", m.spec), f"{m.name}: linearization against the closed form")
@@ -445,7 +454,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
 
     comparisons = [c for s in sections for c in s.comparisons]
     sections = [apply_figure_policy(sec, opts.figure_policy) for sec in sections]
-    localization = faults.localization_lines(comparisons, by_label,
+    localization = faults.localization_lines(opts.tolerances, comparisons, by_label,
                                              {m.name: m.spec for m in opts.models})
     failed = (any(c["passed"] is False for c in checks)
               or any(r["status"] == "failed" for r in rows)

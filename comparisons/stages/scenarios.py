@@ -19,7 +19,7 @@ from ..judgments.contact import declared_difference_rows
 from ..judgments.scenario_compare import (compare_constraints, compare_forward, compare_inverse,
                                           compare_mass_matrix, constraint_series,
                                           trajectory_error)
-from ..judgments.tolerances import load_tolerances
+from ..judgments.tolerances import Tolerances
 from .results import Section, num, verdict_word
 
 CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative to Mped
@@ -96,10 +96,11 @@ def _scenario(name: str, cases: dict | None):
     return cases[name] if cases and name in cases else get_scenario(name)
 
 
-def compare_scenarios(names, setups: dict, runs: dict, horizons: dict, cases: dict | None = None
-                      ) -> Section:
-    """What each scenario's registry entry says is compared, with the figures' data."""
-    tols = load_tolerances()
+def compare_scenarios(tolerances: Tolerances, names, setups: dict, runs: dict, horizons: dict,
+                      cases: dict | None = None) -> Section:
+    """What each scenario's registry entry says is compared (judged by ``tolerances``), with
+    the figures' data."""
+    tols = tolerances
     labels = list(setups)
     sec = Section("Every engine on every scenario")
     sec.text("What each scenario's file (`reference_model/scenario_data/`) lists as "

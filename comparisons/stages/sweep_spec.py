@@ -27,8 +27,12 @@ Two ways to choose bicycles around a base model (a `reference_model.Parameters`)
   order, the chunking or the process that computes it.
 
 The spec hash (`spec_hash`) is the SHA-256 of the canonical JSON of everything the results
-depend on (base parameter values and contact, grids or sample, seed, engines, checks, states);
-the chunk files live under it, so a rerun of the same command finds its finished chunks.
+depend on (base parameter values and contact, grids or sample, seed, engines, checks, states,
+and every tolerance the checks are judged by: ``--tolerances``' values, not its file name);
+the chunk files live under it, so a rerun of the same command finds its finished chunks, and a
+rerun with other tolerances starts afresh instead of mixing verdicts. The tolerances travel in
+the spec, so every Dask task (`sweep_task.chunk_rows(spec, ...)`) judges by them, whatever the
+environment its worker was started in.
 """
 
 from __future__ import annotations
@@ -37,12 +41,14 @@ import dataclasses
 import hashlib
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from reference_model import ParameterError, Parameters
 from reference_model.params import PARAMETER_NAMES, _closest
+
+from ..judgments.tolerances import Tolerances, load_tolerances
 
 #: derived benchmark quantities a grid may vary -> (Table 1 name, from Table 1, to Table 1)
 DERIVED = {
@@ -94,6 +100,8 @@ class SweepSpec:
     engines: tuple[str, ...] = ("pinocchio", "exudyn")
     checks: tuple[str, ...] = ("terms", "eigen")
     n_states: int = 8
+    #: what the terms are judged by (the CLI's --tolerances; default the packaged file)
+    tolerances: Tolerances = field(default_factory=load_tolerances)
 
     @property
     def n_bicycles(self) -> int:
@@ -114,6 +122,7 @@ class SweepSpec:
         d = dataclasses.asdict(self)
         d["base"] = [[n, v] for n, v in self.base]
         d["grids"] = [g.text() for g in self.grids]
+        d["tolerances"] = self.tolerances.as_json()    # the values, not where they were read
         return d
 
 
@@ -161,8 +170,10 @@ def parse_vary(text: str) -> Grid:
 def make_spec(base: Parameters, *, varies=(), sample: int | None = None,
               spread: float | None = None, seed: int = 0,
               engines=("pinocchio", "exudyn"), checks=("terms", "eigen"),
-              n_states: int = 8) -> SweepSpec:
-    """Validate the options into a `SweepSpec` (every grid point is built once here)."""
+              n_states: int = 8, tolerances: Tolerances | None = None) -> SweepSpec:
+    """Validate the options into a `SweepSpec` (every grid point is built once here);
+    ``tolerances``: what the checks are judged by (None: the packaged file; either way the
+    values are in the spec and its hash)."""
     grids = tuple(parse_vary(v) if isinstance(v, str) else v for v in varies)
     if grids and sample is not None:
         raise SpecError("--vary and --sample: give one of them (a grid or a random sample)")
@@ -210,7 +221,8 @@ def make_spec(base: Parameters, *, varies=(), sample: int | None = None,
     spec = SweepSpec(tuple((n, float(getattr(base, n))) for n in PARAMETER_NAMES), base.name,
                      base.contact, base.triangle, grids, sample or 0,
                      float(spread or 0.0), int(seed), tuple(engines),
-                     tuple(c for c in CHECKS if c in checks), int(n_states))
+                     tuple(c for c in CHECKS if c in checks), int(n_states),
+                     tolerances if tolerances is not None else load_tolerances())
     if spec.n_bicycles > MAX_BICYCLES:
         raise SpecError(f"--vary: {spec.n_bicycles} bicycles; at most {MAX_BICYCLES} per sweep "
                         "(use fewer points)")

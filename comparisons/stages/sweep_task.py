@@ -180,9 +180,8 @@ def _terms(spec: SweepSpec, model, row: dict, failures: list[str]) -> bool:
     """Fill the terms columns; True when every compared quantity is within tolerance."""
     from engines import load_engine
     from ..judgments.terms import compare_term, random_states
-    from ..judgments.tolerances import load_tolerances
     states = random_states(spec.n_states, seed=row["seed"])
-    tols = load_tolerances()
+    tols = spec.tolerances          # travelled with the task: no file, no environment
     ref = load_engine("reference", model)
     passed, worst, bad_engines, bad, broke = True, 0.0, [], [], len(failures)
     for e, qs in quantities(spec).items():
@@ -209,15 +208,15 @@ def _terms(spec: SweepSpec, model, row: dict, failures: list[str]) -> bool:
     row["max_error"] = worst
     row["terms_passed"] = passed and len(failures) == broke
     if bad:
-        row["localization"] = "; ".join(bad) + _explanation(model, states, bad_engines)
+        row["localization"] = "; ".join(bad) + _explanation(model, states, bad_engines, tols)
     return passed
 
 
-def _explanation(model, states, engines) -> str:
+def _explanation(model, states, engines, tolerances) -> str:
     """`judgments.diagnose`'s best single cause for the disagreement, if it finds one."""
     try:
         from ..judgments.diagnose import localize
-        loc = localize(model, states, engines)
+        loc = localize(model, states, engines, tolerances=tolerances)
     except Exception as exc:          # noqa: BLE001 -- the localization is a help, not a check
         return f"; localization failed: {_one_line(exc)}"
     if loc.explanation is None:
