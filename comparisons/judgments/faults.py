@@ -15,8 +15,9 @@ The expected localization is part of each fault's definition, worked out from th
 x3 enters every term through rG3 except S, D and dD dq; the contact model only D and dD dq),
 not from the code's output.
 
-    from comparisons.faults import FAULTS, run_fault_suite
-    for r in run_fault_suite(engines=("pinocchio", "exudyn")):
+    from comparisons.judgments.faults import FAULTS, run_fault_suite
+    from comparisons.judgments.tolerances import load_tolerances
+    for r in run_fault_suite(engines=("pinocchio", "exudyn"), tolerances=load_tolerances()):
         print(r.describe())
 """
 

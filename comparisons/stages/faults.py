@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..judgments.faults import run_fault_suite
+from ..judgments.tolerances import Tolerances
 from .results import Section
 
 TERM_QUANTITIES = ("mass_matrix", "inverse_dynamics", "gravity", "generalized_forces",
