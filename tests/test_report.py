@@ -298,7 +298,7 @@ def test_every_stage_is_given_the_runs_tolerances():
     import dataclasses
     import inspect
 
-    from comparisons.judgments.tolerances import Tolerance, Tolerances, load_tolerances
+    from comparisons.judgments.tolerances import Tolerances, load_tolerances
     from comparisons.stages.cases import build_cases, model_spec
     from comparisons.stages.pipeline import Options, _tasks, select
     from comparisons.stages.runs import setups_for

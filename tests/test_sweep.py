@@ -235,7 +235,7 @@ def remote_scheduler(tmp_path):
     import sys
     from pathlib import Path
 
-    from reference_model.codegen import CACHE_ENV, cache_root
+    from reference_model.equations.codegen import CACHE_ENV, cache_root
     root = Path(__file__).resolve().parents[1]
     dask = Path(sys.executable).with_name("dask")
     env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "HOME": str(tmp_path),
