@@ -27,42 +27,20 @@ it; nothing is copied into this repository.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
 from comparisons.cli import main
+from shipped_sets import SETS, file_values, shipped
 
 pytestmark = pytest.mark.bicycles
 
-SETS = ("Benchmark", "Browser", "Browserins", "Crescendo", "Fisher", "Pista", "Rigid", "Silver",
-        "Yellow", "Yellowrev")
 TRIANGLE = ("Browser", "Yellow", "Yellowrev")      # refused by import without the flag
 SPEED_TOL = 1e-9
-_LINE = re.compile(r"^\s*(\w+)\s*=\s*([-+0-9.eE]+)\s*(?:\+/-\s*[-+0-9.eE]+)?\s*$")
-
-
-def _shipped(name: str) -> Path:
-    spec = importlib.util.find_spec("bicycleparameters")
-    assert spec is not None and spec.submodule_search_locations, (
-        "the test dependency bicycleparameters is not installed: pip install -e '.[test]'")
-    root = Path(next(iter(spec.submodule_search_locations)))
-    return root / "app-data" / "bicycles" / name / "Parameters" / f"{name}Benchmark.txt"
-
-
-def _nominal(path: Path) -> dict[str, float]:
-    """The file's values, parsed here (independently of the project's reader)."""
-    out = {}
-    for line in path.read_text(encoding="utf-8").splitlines():
-        m = _LINE.match(line)
-        assert m, f"{path.name}: unexpected line {line!r}"
-        out[m.group(1)] = float(m.group(2))
-    return out
 
 
 def _canonical_speeds(values: dict[str, float]) -> dict[str, float]:
@@ -106,7 +84,7 @@ def imported(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("bicycles")
     out = {}
     for name in SETS:
-        args = ["import", str(_shipped(name)), "--from", "benchmark", "--out",
+        args = ["import", str(shipped(name)), "--from", "benchmark", "--out",
                 str(tmp / f"{name}.toml")]
         if name in TRIANGLE:
             assert main(args) != 0, f"{name} breaks the triangle inequality: import must refuse"
@@ -199,7 +177,7 @@ def test_soft_contact_is_a_declared_difference_on_every_bicycle(report, name):
 
 @pytest.mark.parametrize("name", SETS)
 def test_critical_speeds_equal_bicycleparameters_canonical_ones(report, name):
-    expected = _canonical_speeds(_nominal(_shipped(name)))
+    expected = _canonical_speeds(file_values(shipped(name)))
     got = report["summary"]["critical_speeds"][report["names"][name]]
     assert set(got) == set(expected), (got, expected)
     for mode, v in expected.items():
