@@ -13,6 +13,7 @@ import pytest
 
 from comparisons.cli import main
 from comparisons.stages.files import MANIFEST, ReportFolder, write_text
+from comparisons.stages.ownership import is_report_name
 
 TINY = ["run", "--quick", "--scenarios", "check", "--engines", "reference"]
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,17 +32,19 @@ def test_run_never_touches_files_it_did_not_write(tmp_path):
     mine = [out / "data" / "mine.csv", out / "figures" / "mine.png", out / "notes.txt"]
     for f in mine:
         f.write_text("the user's own file\n")
-    assert main([*TINY, "--out", str(out)]) == 0
+    assert main([*TINY, "--out", str(out), "--force"]) == 0   # a folder without a report
     assert main([*TINY, "--out", str(out)]) == 0          # and again, over its own report
     assert all(f.read_text() == "the user's own file\n" for f in mine)
     written = (out / MANIFEST).read_text().split()
     assert "summary.json" in written and "data/mine.csv" not in written
+    assert all(is_report_name(w) for w in written)        # so the next run may replace them
 
 
 def test_a_failed_stage_leaves_the_old_report_as_it_was(tmp_path):
     out = tmp_path / "r"
     out.mkdir()
     (out / "summary.json").write_text('{"passed": true}\n')
+    (out / MANIFEST).write_text("summary.json\n")            # an earlier report
     with pytest.raises(RuntimeError):
         with ReportFolder(out) as folder:
             write_text(folder.path / "summary.json", '{"passed": false}\n')

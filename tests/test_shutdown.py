@@ -69,6 +69,7 @@ def _old_report(tmp_path) -> Path:
     out = tmp_path / "r"
     out.mkdir()
     (out / "summary.json").write_text(OLD_REPORT)
+    (out / ".bicycle-xval-files").write_text("summary.json\n")   # the earlier run's manifest
     return out
 
 

@@ -4,7 +4,7 @@
     bicycle-xval scenarios
     bicycle-xval inverse-dynamics --model thesis --scenario zigzag --out FILE.csv
     bicycle-xval simulate --model thesis --scenario stability-psid10 --out FILE.csv
-    bicycle-xval run [--out DIR] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
+    bicycle-xval run [--out DIR] [--force] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
                      [--tolerances FILE] [--model NAME|FILE ...] [--scenario-file FILE ...]
     bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn,kane] [--json OUT]
                           [--tolerances FILE]
@@ -139,8 +139,11 @@ def cmd_run(args) -> int:
         raise UsageError(f"--jobs must be between 1 and {MAX_WORKERS}; got {args.jobs}")
     from .tolerance_option import tolerances_from
     tolerances = tolerances_from(args)     # read once, checked before the runs
-    if args.out.exists() and not args.out.is_dir():
-        raise UsageError(f"--out {args.out} is a file; give a folder for the report")
+    from ..stages.ownership import OutFolderError, check_out_folder
+    try:
+        check_out_folder(args.out, args.force)     # before the runs, and again at the swap
+    except OutFolderError as exc:
+        raise UsageError(str(exc)) from None
     try:
         opts = select(args.scenarios, args.quick, args.engines)
     except SelectionError as exc:
@@ -160,8 +163,11 @@ def cmd_run(args) -> int:
     opts = with_models(opts, args.model, args.scenario_file)
     result = run_comparison(opts, _progress)   # opts.tolerances goes to every stage's args
     _progress("writing the report ...")
-    path = write_report(result, args.out, data=not args.no_data, html=not args.no_html,
-                        progress=_progress)
+    try:
+        path = write_report(result, args.out, data=not args.no_data, html=not args.no_html,
+                            progress=_progress, force=args.force)
+    except OutFolderError as exc:                  # the folder changed during the runs
+        raise UsageError(str(exc)) from None
     passed = result.summary["passed"]
     _progress(f"report written to {path} and report.html in "
               f"{result.timings['total_seconds']:.1f} s of runs: "
@@ -261,6 +267,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("run", help="run every scenario and write the report")
     s.add_argument("--out", type=Path, default=Path("reports/latest"), help="output folder [reports/latest]")
+    s.add_argument("--force", action="store_true",
+                   help="write into a non-empty --out that holds no earlier report: only the "
+                        "files the report writes are replaced, the rest stays")
     s.add_argument("--scenarios", default=None, help="comma-separated subset of scenarios")
     s.add_argument("--engines", default=None,
                    help="comma-separated engines to compare with the reference: names (see "

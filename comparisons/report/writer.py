@@ -42,12 +42,14 @@ def draw_figures(result, workers: int | None = None) -> dict[str, bytes]:
 
 
 def write_report(result, out: Path, data: bool = True, html: bool = True,
-                 progress: Callable[[str], None] = lambda s: None) -> Path:
-    """Write the report of ``result`` into ``out`` (a folder); returns the path of report.md."""
+                 progress: Callable[[str], None] = lambda s: None, force: bool = False) -> Path:
+    """Write the report of ``result`` into ``out`` (a folder); returns the path of report.md.
+    A non-empty ``out`` without an earlier report is refused unless ``force``
+    (`files.ReportFolder`)."""
     pngs = draw_figures(result, result.options.workers)
     policy = result.summary.get("figures", "all")
     progress(f"  {len(pngs)} figure(s) drawn" + ("" if policy == "all" else f" (--figures {policy})"))
-    with ReportFolder(out) as folder:
+    with ReportFolder(out, force) as folder:
         root = folder.path
         for name, png in pngs.items():
             write_bytes(root / "figures" / name, png)

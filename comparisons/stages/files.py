@@ -5,7 +5,9 @@ Every file goes to a temporary name in its own folder and is renamed over the ta
 complete (``os.replace`` is atomic on one file system); text is always UTF-8, whatever the
 locale. A report folder is assembled beside its destination and swapped in whole
 (`ReportFolder`), so an interrupted run leaves either the old complete report or nothing new,
-and files in the destination that the harness did not write are never touched.
+and files in the destination that the harness did not write are never touched: the manifest
+is believed only for names the report writer produces, inside the destination, never through
+a symbolic link (`ownership`).
 """
 
 from __future__ import annotations
@@ -17,8 +19,7 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-#: what a report folder holds that the harness wrote; nothing else is ever moved or deleted
-MANIFEST = ".bicycle-xval-files"
+from .ownership import MANIFEST, check_out_folder, owned_target
 
 
 def _umask() -> int:
@@ -165,15 +166,18 @@ class ReportFolder:
     """A report assembled in a fresh folder beside ``out`` and swapped in when complete.
 
     ``with ReportFolder(out) as folder: ... folder.path / "report.md" ...``: on success the
-    files the previous run wrote (listed in its manifest) are removed from ``out``, the new ones
-    moved in, and the manifest rewritten; files the harness did not write stay as they were.
+    files the previous run wrote (listed in its manifest, each a report name inside ``out``,
+    `ownership.owned_target`) are removed from ``out``, the new ones moved in, and the manifest
+    rewritten; files the harness did not write stay as they were. A non-empty ``out`` without a
+    manifest is refused unless ``force`` (then only the files the report writes are replaced),
+    as is a folder of the packages (`ownership.check_out_folder`, `OutFolderError`).
     On an exception (Ctrl-C, SIGTERM, a failure) the staging folder is removed and ``out`` is
     untouched."""
 
-    def __init__(self, out: Path):
+    def __init__(self, out: Path, force: bool = False):
         self.out = Path(out)
-        if self.out.exists() and not self.out.is_dir():
-            raise NotADirectoryError(f"--out {self.out} is a file; give a folder")
+        self.force = force
+        check_out_folder(self.out, force)
         self.out.parent.mkdir(parents=True, exist_ok=True)
         self.path: Path | None = None
 
@@ -202,17 +206,22 @@ class ReportFolder:
             os.replace(staged, self.out)            # the common case: one atomic rename
             write_text(self.out / MANIFEST, "\n".join(new) + "\n")
             return
+        check_out_folder(self.out, self.force)      # again: the folder may have changed meanwhile
         manifest = self.out / MANIFEST
-        old = manifest.read_text(encoding="utf-8").split() if manifest.is_file() else []
-        for rel in old:                             # only what an earlier run wrote
-            target = self.out / rel
-            if target.is_file() and rel not in new:
+        listed = (manifest.read_text(encoding="utf-8").splitlines()
+                  if manifest.is_file() and not manifest.is_symlink() else [])
+        targets = {rel: owned_target(self.out, rel) for rel in new}
+        stray = [rel for rel, t in targets.items() if t is None]
+        if stray:                                   # the writer's own names always pass
+            raise OSError(f"{self.out / stray[0]}: not a file a report may write")
+        old = [t for t in (owned_target(self.out, rel) for rel in listed if rel not in new) if t]
+        for target in old:                          # only what an earlier run wrote, inside out
+            if target.is_file():
                 target.unlink()
-        for rel in new:
-            target = self.out / rel
-            target.parent.mkdir(parents=True, exist_ok=True)
+        for rel, target in targets.items():
+            target.parent.mkdir(exist_ok=True)
             os.replace(staged / rel, target)
         write_text(manifest, "\n".join(new) + "\n")
-        for folder in sorted({(self.out / r).parent for r in old}, reverse=True):
+        for folder in sorted({t.parent for t in old}, reverse=True):
             if folder != self.out and folder.is_dir() and not any(folder.iterdir()):
                 folder.rmdir()
