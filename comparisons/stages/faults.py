@@ -22,8 +22,7 @@ def fault_base(engine: str) -> str:
     return "thesis" if "thesis" in getattr(resolve(engine)[0], "contacts", ()) else "thesis-disc"
 
 
-def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None,
-                  n_states: int | None = None) -> list[dict]:
+def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None) -> list[dict]:
     """The fault suite against one engine, judged by ``tolerances`` (a stage: worker processes
     call it). Pinocchio
     computes every term, so every fault must be detected and localized on it; the Exudyn tree
@@ -38,10 +37,8 @@ def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None,
     entries = []
     base = fault_base(engine) if model is None else model
     name = load_model(base).name
-    kwargs = {} if n_states is None else {"n_states": n_states}
     try:
-        results = run_fault_suite(engines=(engine,), base=base, tolerances=tolerances,
-                                  **kwargs)
+        results = run_fault_suite(engines=(engine,), base=base, tolerances=tolerances)
     except UnsupportedModel as exc:   # the engine cannot represent this bicycle: declared
         return [{"fault": "-", "engine": engine, "model": name, "detected": None,
                  "localized_to": "-", "expected": "-", "correct": None, "observable": False,
