@@ -24,6 +24,8 @@ from __future__ import annotations
 
 from reference_model import Model
 
+from .facts import Costs, FixedStep, RunSetup, SoftContact
+
 CAPABILITIES = (
     "mass_matrix", "inverse_dynamics", "gravity", "generalized_forces", "constraint_jacobian",
     "constraint_bias", "forward_acceleration", "simulate",
@@ -83,6 +85,21 @@ class Engine:
     #: judged by the ideal-rolling tolerances: its departures (slip, penetration, error up to
     #: the meaningful horizon, lift-off) are measured and reported as that difference.
     run_difference: str | None = None
+
+    # -- the engine's facts (`engines.facts`; docs/engines.md, "An engine's facts") ----------
+    #: how reports and figures name and draw the engine ("" : its registered name)
+    label: str = ""
+    colour: str | None = None
+    #: the table of tolerances.toml judging its forward runs against the reference's, or None
+    #: when a study it contributes judges them (say which in ``trajectory_judged_by``)
+    trajectory_tolerance: str | None = "trajectory_conformance"
+    trajectory_judged_by: str = ""
+    #: the labelled option sets of its scenario runs (empty: one, its name, its defaults)
+    run_setups: tuple[RunSetup, ...] = ()
+    costs: Costs = Costs()
+    #: the studies it contributes: a fixed-step integrator's, a soft contact's (or None)
+    fixed_step: FixedStep | None = None
+    soft_contact: SoftContact | None = None
 
     def __init__(self, model: Model):
         self.model = model

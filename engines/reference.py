@@ -5,6 +5,7 @@ from __future__ import annotations
 from reference_model.scenarios import Scenario, run_forward
 
 from .base import CAPABILITIES, Engine
+from .facts import Costs, RunSetup
 
 
 class ReferenceEngine(Engine):
@@ -12,6 +13,14 @@ class ReferenceEngine(Engine):
 
     name = "reference"
     capabilities = frozenset(CAPABILITIES)
+    label = "reference"
+    colour = "k"
+    trajectory_tolerance = None   # everything else is compared against it
+    trajectory_judged_by = "it is the reference"
+    run_setups = (RunSetup(settings="inverse: inverse kinematics DOP853 rtol 1e-12 + 13x13 LU; "
+                                    "forward: DOP853 rtol 1e-10, atol 1e-12, the scenario's "
+                                    "constraint handling (Baumgarte a1 = a2 = 10)"),)
+    costs = Costs(run_per_second=0.05, short_run=0.1, terms=0.0, faults=0.0)
 
     def mass_matrix(self, q):
         return self.model.mass_matrix(q)

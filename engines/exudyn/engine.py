@@ -70,6 +70,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import THETA, Trajectory
 
 from ..base import Engine, EngineError, EngineUsageError
+from ..facts import Costs, FixedStep, RunSetup
 
 try:
     import exudyn as exu
@@ -97,6 +98,7 @@ SOLVERS = {"generalizedAlpha": "GeneralizedAlpha", "trapezoidal": "TrapezoidalIn
 #: function is differentiated numerically) and 2.5x on the thesis contact (Python user
 #: constraints). Hence the default stays Exudyn's, and the benchmark stages ask for 'per-step'.
 JACOBIAN_UPDATES = ("when-slow", "per-step")
+RUN_STEP = 1e-3   # s: the harness's runs (divides the 0.01 s output grid)
 # rider torque k -> (body marker, body axis): steer z4 on the fork, pedal y2 on the rear
 # wheel, anti-roll x3 on the frame
 TORQUE_TARGETS = (("fork", 2), ("rear", 1), ("frame", 0))
@@ -357,6 +359,26 @@ class ExudynEngine(Engine):
     name = "exudyn"
     # with the default build='tree'; build='redundant' narrows them to {'simulate'}
     capabilities = frozenset({"mass_matrix", "generalized_forces", "simulate"})
+    label = "Exudyn"
+    colour = "tab:blue"
+    #: a fixed-step integrator: its runs are reported against the reference, and judged by
+    #: their convergence order (the fixed-step study, `fixed_step` below)
+    trajectory_tolerance = None
+    trajectory_judged_by = "its convergence order (the fixed-step study)"
+    run_setups = (RunSetup("tree", (("build", "tree"), ("step", RUN_STEP)), kinds=("forward",),
+                           settings=f"ObjectKinematicTree, generalized-alpha (spectral radius "
+                                    f"0.9, index 3), h = {RUN_STEP:g} s, Newton tolerance 1e-10; "
+                                    "no inverse dynamics"),)
+    costs = Costs(run_per_second=0.6, short_run=0.8, terms=1.0, faults=3.0)
+    fixed_step = FixedStep(
+        option="step", step=RUN_STEP, order=2.0,
+        variants=(("tree", (("build", "tree"),)), ("redundant", (("build", "redundant"),))),
+        thesis_variant="tree", quick_variants=("tree",),
+        # Newton's Jacobian recomputed every step on the benchmark bicycle: 2.5 instead of 7.5
+        # Newton iterations per step, 0.59x the run time (JACOBIAN_UPDATES); the runs move by
+        # up to 2e-8 rad and every verdict stays
+        benchmark_options=(("jacobian", "per-step"),),
+        describe="generalized-alpha (spectral radius 0.9, index 3)")
 
     def __init__(self, model: Model, build: str = "tree", step: float = 1e-3,
                  solver: str = "generalizedAlpha", spectral_radius: float = 0.9,

@@ -43,6 +43,7 @@ from reference_model.moore import rates_from_moore, rates_to_moore
 from reference_model.scenarios import Scenario, run_forward
 
 from ..base import CapabilityError, Engine
+from ..facts import Costs, RunSetup
 from . import codegen
 from .names import MOORE_PARAMETERS
 
@@ -168,6 +169,16 @@ class KaneEngine(Engine):
     capabilities = frozenset({"mass_matrix", "generalized_forces", "constraint_jacobian",
                               "constraint_bias", "forward_acceleration", "simulate"})
     contacts = ("disc",)
+    label = "Kane"
+    colour = "tab:purple"
+    #: the reference's own solvers on Kane's equations: judged to [trajectory]
+    trajectory_tolerance = "trajectory"
+    run_setups = (RunSetup(kinds=("forward",),
+                           settings="Moore's Whipple bicycle by Kane's method (sympy KanesMethod, "
+                                    "generated code, dependent speeds eliminated per state) in the "
+                                    "reference's solvers (same integrator and tolerances); disc "
+                                    "front contact only; no inverse dynamics"),)
+    costs = Costs(run_per_second=0.3, short_run=0.8, terms=1.5, faults=2.0)
 
     @classmethod
     def prepare(cls) -> None:

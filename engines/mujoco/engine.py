@@ -43,6 +43,8 @@ from reference_model import COORDINATES, Model
 from reference_model.export_mjcf import MjcfSettings, massless_links, mjcf_text
 
 from ..base import CapabilityError, Engine, EngineError, EngineUsageError, UnsupportedModel
+from ..facts import Costs, RunSetup
+from .contact_study import SOFT_CONTACT
 from .options import tuple_option
 
 try:
@@ -86,6 +88,17 @@ class MujocoEngine(Engine):
     run_difference = ("soft contact: MuJoCo's wheels touch the ground through a soft, frictional, "
                       "unilateral contact, not the reference's ideal rolling constraint (they "
                       "slip, sink and can lift off)")
+    label = "MuJoCo"
+    colour = "tab:red"
+    run_setups = (RunSetup(kinds=("forward",), settings=(
+        f"MuJoCo's own soft wheel-ground contact (disc-contact models only): cylinders on a "
+        f"plane, {DEFAULTS.cone} cone, condim {DEFAULTS.condim}, solref "
+        f"({DEFAULTS.solref[0]:g} s, {DEFAULTS.solref[1]:g}), timestep {DEFAULTS.timestep:g} s, "
+        f"{DEFAULTS.integrator}: the contact study's closest to ideal rolling; no inverse "
+        "dynamics")),)
+    costs = Costs(run_per_second=0.35, short_run=0.8, terms=1.5, faults=1.0)
+    #: its soft contact's study (slip, penetration, lift-off, refinement): `contact_study`
+    soft_contact = SOFT_CONTACT
     #: the conformance checks MuJoCo is expected to fail, with the reason (read by the plugin)
     conformance_xfails = Path(__file__).with_name("conformance_xfails.txt")
 

@@ -55,6 +55,7 @@ from reference_model.model import DEP, IND, ForwardResult, raise_on_status, torq
 from reference_model.scenarios import Scenario, run_forward, run_inverse
 
 from ..base import CAPABILITIES, Engine, EngineError
+from ..facts import Costs, RunSetup
 
 try:
     import pinocchio as pin
@@ -176,6 +177,13 @@ class PinocchioEngine(Engine):
 
     name = "pinocchio"
     capabilities = frozenset(CAPABILITIES)
+    label = "Pinocchio"
+    colour = "tab:orange"
+    #: the reference's own solvers on Pinocchio's terms: judged to [trajectory]
+    trajectory_tolerance = "trajectory"
+    run_setups = (RunSetup(settings="the reference's solvers on Pinocchio's crba, rnea and frame "
+                                    "kinematics (same integrator and tolerances)"),)
+    costs = Costs(run_per_second=0.6, short_run=0.8, terms=1.5, faults=4.0)
 
     def __init__(self, model: Model):
         super().__init__(model)
