@@ -17,7 +17,7 @@ from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError,
                    EngineSpecError, EngineUsageError, UnsupportedModel)
 from .loading import (EngineInfo, LoadedEngines, engine_info, load_engine, load_engines,
                       parse_engine_options, split_options)
-from .registry import GROUP, EngineNotInstalled, available_engines, not_installed
+from .registry import GROUP, EngineNotInstalled, available_engines, default_engines, not_installed
 
 # The built-in engines' names (a constant kept for existing imports; what is installed and
 # registered right now, third parties' included, is `available_engines()`).
@@ -25,5 +25,5 @@ ENGINES = ("reference", "pinocchio", "exudyn")
 
 __all__ = ["CAPABILITIES", "CONTACTS", "ENGINES", "GROUP", "CapabilityError", "Engine",
            "EngineError", "EngineInfo", "EngineLoadError", "EngineNotInstalled", "EngineSpecError",
-           "EngineUsageError", "LoadedEngines", "UnsupportedModel", "available_engines", "engine_info",
+           "EngineUsageError", "LoadedEngines", "UnsupportedModel", "available_engines", "default_engines", "engine_info",
            "load_engine", "load_engines", "not_installed", "parse_engine_options", "split_options"]

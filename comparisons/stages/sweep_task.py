@@ -228,7 +228,7 @@ def _runs(spec: SweepSpec, model, crit: dict[str, float], row: dict, failures: l
     """Forward runs below and above each critical speed on every engine that simulates (the
     scenario and judgment of `stages.stability`); True when none contradicts the prediction."""
     from engines import load_engine
-    from .runs import SETUPS
+    from .runs import setup_of
     from .stability import judge_run, run_speeds
     ok = True
     for mode, factor, speed in run_speeds(crit):
@@ -236,7 +236,7 @@ def _runs(spec: SweepSpec, model, crit: dict[str, float], row: dict, failures: l
         for e in _run_engines(spec):
             col = f"run.{mode}.{factor:g}.{e}"
             try:
-                setup = SETUPS[RUN_LABELS[e]]
+                setup = setup_of(e)
                 engine = load_engine(setup.engine, model, **dict(setup.options))
                 traj = engine.simulate(scenario)
                 j = judge_run(model, mode, speed, traj)
