@@ -24,7 +24,8 @@ from __future__ import annotations
 
 from reference_model import Model
 
-from .facts import Costs, FixedStep, RunSetup, SoftContact
+# The facts' attributes below are typed by `engines.facts` (RunSetup, Costs, FixedStep,
+# SoftContact), which reads them; not imported here, so the types stay free of the registry.
 
 CAPABILITIES = (
     "mass_matrix", "inverse_dynamics", "gravity", "generalized_forces", "constraint_jacobian",
@@ -96,7 +97,7 @@ class Engine:
     trajectory_judged_by: str = ""
     #: the labelled option sets of its scenario runs (empty: one, its name, its defaults)
     run_setups: tuple[RunSetup, ...] = ()
-    costs: Costs = Costs()
+    costs: Costs | None = None      # None: `engines.facts.Costs`' defaults
     #: the studies it contributes: a fixed-step integrator's, a soft contact's (or None)
     fixed_step: FixedStep | None = None
     soft_contact: SoftContact | None = None

@@ -135,6 +135,7 @@ def cmd_compare_trajectory(args) -> int:
         print(f"  claim {c['claim_id']}: {c['verdict']}: {c['evidence']}")
     if args.json is not None:
         write_text(args.json, json.dumps({"scenario": sc.name, "engine": label,
-                                          "comparisons": comps, "claims": claims},
+                                          "comparisons": [dict(c) for c in comps],
+                                          "claims": claims},
                                          indent=1, default=float) + "\n")
     return EXIT_FAIL if any(c["passed"] is False for c in comps) else EXIT_OK

@@ -35,6 +35,7 @@ from reference_model import COORDINATES
 from reference_model.solvers import Trajectory
 
 from .convergence import MIN_SPAN, NO_SHRINK_ORDER, REFERENCE_FLOOR, error_vs_time, fit_order
+from .rows import Comparison
 
 __all__ = ["PENETRATION_KEYS", "SLIP_KEYS", "ContactFidelity", "Refinement", "contact_fidelity",
            "declared_difference_rows", "error_at", "lift_off_time", "local_orders",
@@ -253,8 +254,8 @@ def declared_difference_rows(ref, run, horizon, difference: str, constraint_max:
     base = {"scenario": run.scenario, "model": run.model, "tolerance": None, "passed": None,
             "declared_difference": difference, "note": note,
             "why": "declared model difference"}
-    rows = [dict(base, quantity="constraint_residual", engines=[run.engine],
-                 max_error=constraint_max, localized_to=constraint_where)]
+    rows = [Comparison.of(dict(base, quantity="constraint_residual", engines=[run.engine],
+                 max_error=constraint_max, localized_to=constraint_where))]
     traj = run.trajectory
     if not run.t.size or ref.trajectory is None or traj is None:
         return rows
@@ -262,17 +263,17 @@ def declared_difference_rows(ref, run, horizon, difference: str, constraint_max:
     upto = min(float(horizon.t), run.t_end, ref.t_end)
     err = error_vs_time(ref.trajectory, traj, COORDINATES, upto)
     worst = np.stack([err[c] for c in COORDINATES], axis=1).max(axis=0)
-    rows.append(dict(base, quantity="trajectory", engines=[ref.engine, run.engine],
+    rows.append(Comparison.of(dict(base, quantity="trajectory", engines=[ref.engine, run.engine],
                      max_error=float(err["max"].max()), horizon=float(horizon.t),
                      horizon_reason=horizon.reason, lift_off_s=lift,
                      localized_to=f"largest: {COORDINATES[int(np.argmax(worst))]}, up to the "
                                   f"meaningful horizon {horizon.t:.2f} s"
                                   + (f"; a wheel lifts off at {lift:.2f} s" if lift is not None
-                                     else "")))
+                                     else ""))))
     diag = getattr(traj, "diagnostics", None) or {}
     if all(k in diag for k in SLIP_KEYS + PENETRATION_KEYS):
         fid = contact_fidelity(ref.trajectory, traj, horizon=upto)
-        rows.append(dict(base, quantity="contact fidelity (slip, penetration, trajectory)",
+        rows.append(Comparison.of(dict(base, quantity="contact fidelity (slip, penetration, trajectory)",
                          engines=[ref.engine, run.engine], max_error=fid.error_max,
                          horizon=fid.horizon, slip_max=fid.slip_max, slip_rms=fid.slip_rms,
                          penetration_max=fid.penetration_max,
@@ -281,5 +282,5 @@ def declared_difference_rows(ref, run, horizon, difference: str, constraint_max:
                                       f"penetration max {fid.penetration_max:.1e} m up to "
                                       f"{fid.horizon:.2f} s"
                                       + (f"; lift-off at {lift:.2f} s" if lift is not None
-                                         else "; no lift-off")))
+                                         else "; no lift-off"))))
     return rows

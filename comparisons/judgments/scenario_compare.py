@@ -23,6 +23,7 @@ from engines.runs import Run
 
 from .terms import States, compare_term
 from .tolerances import Tolerance
+from .rows import Comparison
 
 @dataclass(frozen=True)
 class TrajectoryError:
@@ -67,12 +68,12 @@ def compare_inverse(ref: Run, other: Run, tols: dict[str, Tolerance]) -> list[di
         scale = tol.normalizer(a)
         k, i = np.unravel_index(int(np.argmax(diff)), diff.shape)
         err = float(diff.max()) / scale
-        out.append({
+        out.append(Comparison.of({
             "quantity": quantity, "scenario": ref.scenario, "model": ref.model,
             "engines": [ref.engine, other.engine], "max_error": err, "max_abs_error": float(diff.max()),
             "tolerance": tol.tolerance, "passed": bool(err <= tol.tolerance),
             "localized_to": f"{names[i]} at t = {ref.t[k]:.2f} s",
-            "note": f"over {len(ref.t)} samples; error relative to {scale:.3g} ({tol.scale})"})
+            "note": f"over {len(ref.t)} samples; error relative to {scale:.3g} ({tol.scale})"}))
     return out
 
 
@@ -89,11 +90,11 @@ def compare_mass_matrix(scenario: str, model, states_q: np.ndarray, engines: dic
         if label == "reference" or not eng.supports("mass_matrix"):
             continue
         r = compare_term("mass_matrix", ref, eng, states, tols["mass_matrix"])
-        out.append({"quantity": "mass_matrix", "scenario": scenario, "model": model.name,
+        out.append(Comparison.of({"quantity": "mass_matrix", "scenario": scenario, "model": model.name,
                     "engines": ["reference", label], "max_error": r.max_error,
                     "max_abs_error": r.max_abs_error, "tolerance": r.tolerance,
                     "passed": r.passed, "localized_to": f"{r.worst_entry} at state {r.worst_state}",
-                    "note": f"at the reference's {n} states of the scenario"})
+                    "note": f"at the reference's {n} states of the scenario"}))
     return out
 
 
@@ -114,7 +115,7 @@ def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols,
     te = trajectory_error(ref, other, horizon.t)
     same_solver = judged_by == "trajectory"
     tol = tols[judged_by] if judged_by else None
-    comp = {
+    comp = Comparison.of({
         "quantity": "trajectory", "scenario": ref.scenario, "model": ref.model,
         "engines": [ref.engine, other.engine], "max_error": te.worst,
         "tolerance": tol.tolerance if tol else None,
@@ -127,7 +128,7 @@ def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols,
                  f"its own integrator: judged by [{judged_by}]" if tol else
                  f"reported here, judged by {reported_because}"),
         "why": "" if tol else f"judged by {reported_because}",
-    }
+    })
     return [comp], te
 
 
@@ -136,13 +137,13 @@ def compare_constraints(model, run: Run, tols) -> dict:
     C = constraint_series(model, run)
     tol = tols["constraint_residual"]
     if C.size == 0:
-        return {"quantity": "constraint_residual", "scenario": run.scenario, "model": run.model,
+        return Comparison.of({"quantity": "constraint_residual", "scenario": run.scenario, "model": run.model,
                 "engines": [run.engine], "max_error": None, "tolerance": tol.tolerance,
-                "passed": None, "localized_to": "-", "note": f"no samples ({run.status})"}
+                "passed": None, "localized_to": "-", "note": f"no samples ({run.status})"})
     k, i = np.unravel_index(int(np.argmax(C)), C.shape)
     err = float(C.max())
-    return {"quantity": "constraint_residual", "scenario": run.scenario, "model": run.model,
+    return Comparison.of({"quantity": "constraint_residual", "scenario": run.scenario, "model": run.model,
             "engines": [run.engine], "max_error": err, "tolerance": tol.tolerance,
             "passed": bool(err <= tol.tolerance),
             "localized_to": f"C[{CONSTRAINT_NAMES[i]}] at t = {run.t[k]:.2f} s",
-            "note": f"whole run to {run.t_end:.3f} s ({run.status})"}
+            "note": f"whole run to {run.t_end:.3f} s ({run.status})"})

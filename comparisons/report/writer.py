@@ -15,12 +15,17 @@ from typing import Callable
 
 import numpy as np
 
+from ..judgments.rows import Comparison
 from . import figures, frames, markdown
 from ..stages.files import ReportFolder, write_bytes, write_csv, write_text
 from .html import write_html
 
 
 def _json_default(x):
+    """summary.json's values that json does not know: a comparison row (`Comparison`, turned
+    into its dict here, at the writer), numpy scalars."""
+    if isinstance(x, Comparison):
+        return x.as_dict()
     if isinstance(x, (np.floating, np.integer)):
         return x.item()
     if isinstance(x, np.bool_):

@@ -81,6 +81,7 @@ from ..judgments.convergence import (DEFAULT_STEPS, ConvergenceStudy, Horizon, c
 from ..judgments.energy import energy_drift
 from ..judgments.terms import States, compare_terms, random_states
 from ..judgments.tolerances import Tolerances
+from ..judgments.rows import Comparison
 from .results import Section
 from .stage import Assembled, Plan, Stage
 
@@ -184,10 +185,10 @@ def benchmark_terms(tolerances: Tolerances, quick: bool,
             for r in compare_terms(ref, eng, states, tolerances, quantities):
                 rows.append((label, where, r.quantity, f"{r.max_error:.1e}", f"{r.tolerance:.0e}",
                              "pass" if r.passed else "FAIL", r.worst_entry))
-                sec.comparisons.append({
+                sec.comparisons.append(Comparison.of({
                     "quantity": r.quantity, "scenario": where, "model": model.name,
                     "engines": ["reference", label], "max_error": r.max_error,
-                    "tolerance": r.tolerance, "passed": r.passed, "localized_to": r.worst_entry})
+                    "tolerance": r.tolerance, "passed": r.passed, "localized_to": r.worst_entry}))
     sec.table(("engine", "states", "quantity", "max error", "tolerance", "verdict", "worst entry"),
               rows)
     return sec
@@ -249,27 +250,27 @@ def _manoeuvre_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
             else:
                 err = error_vs_time(ref, tr, coords=COORDINATES, horizon=mr.horizon.t)
                 worst, first = f"{err['max'].max():.2e}", _first_past(err)
-                sec.comparisons.append({
+                sec.comparisons.append(Comparison.of({
                     "quantity": "trajectory (benchmark)", "scenario": name, "model": model.name,
                     "engines": ["reference", label], "max_error": float(err["max"].max()),
                     "tolerance": None, "passed": None, "horizon": mr.horizon.t,
                     "horizon_reason": mr.horizon.reason, "localized_to": first,
                     "note": "reported, not judged: integrator error at h = 1e-3 (see the "
-                            "convergence check)"})
+                            "convergence check)"}))
                 curves[label] = {"t": err["t"], "theta": err["theta"], "max": err["max"]}
             rows.append((name, f"{mr.speed:g}", label, tr.status, f"{mr.horizon.t:.2f}", worst,
                          first, f"{Cmax:.1e}", f"{drift['drift_percent']:.2e}"))
-            sec.comparisons.append({
+            sec.comparisons.append(Comparison.of({
                 "quantity": "constraint_residual", "scenario": name, "model": model.name,
                 "engines": [label], "max_error": Cmax, "tolerance": c_tol,
-                "passed": bool(Cmax <= c_tol), "localized_to": "max |C| over the run"})
-            sec.comparisons.append({
+                "passed": bool(Cmax <= c_tol), "localized_to": "max |C| over the run"}))
+            sec.comparisons.append(Comparison.of({
                 "quantity": "energy drift percent (IFToMM)", "scenario": name,
                 "model": model.name, "engines": [label], "max_error": drift["drift_percent"],
                 "tolerance": drift_tol, "passed": bool(drift["drift_percent"] <= drift_tol),
                 "localized_to": f"Emax at {drift['t_Emax']:.2f} s, Emin at {drift['t_Emin']:.2f} s",
                 "note": (f"100 (Emax - Emin)/|E0| over the 0.01 s output, E0 = {drift['E0']:.3f} J "
-                         f"(ground as zero of V), E_end - E0 = {drift['E_end_minus_E0']:+.2e} J")})
+                         f"(ground as zero of V), E_end - E0 = {drift['E_end_minus_E0']:+.2e} J")}))
         if len(engines) == 1:
             continue
         error_panels.append({"title": f"{name}: {', '.join(mr.engines)} against the "
@@ -308,11 +309,11 @@ def _outcome_part(sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None
             linear = lin[2].real if o.expected == "slow capsize" else lin[0].real
             rows.append((o.scenario, label, o.expected, f"{o.measured:+.4f}", f"{linear:+.4f}",
                          "pass" if o.passed else "FAIL", o.evidence))
-            sec.comparisons.append({
+            sec.comparisons.append(Comparison.of({
                 "quantity": f"outcome: {o.expected}", "scenario": o.scenario, "model": model.name,
                 "engines": [label], "max_error": None, "tolerance": None, "passed": o.passed,
                 "measured": o.measured, "expected": o.expected, "linear": float(linear),
-                "localized_to": f"measured rate {o.measured:+.4f} /s", "note": o.evidence})
+                "localized_to": f"measured rate {o.measured:+.4f} /s", "note": o.evidence}))
     sec.table(("scenario", "engine", "expected", "measured rate [1/s]", "linear [1/s]", "verdict",
                "how"), rows)
 
@@ -341,12 +342,12 @@ def _nonlinear_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
     rows = []
     for f in fits:
         ok = f.deviation <= f.tolerance
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": f"{f.mode} eigenvalue, nonlinear fit vs linear", "scenario": f.scenario,
             "model": model.name, "engines": ["reference (nonlinear)", "linearize"],
             "max_error": f.deviation, "tolerance": f.tolerance, "passed": bool(ok),
             "localized_to": f"a = {f.amplitude:.2e} rad",
-            "note": f"fitted {f.fitted:.10f} /s, linear {f.linear:.10f} /s"})
+            "note": f"fitted {f.fitted:.10f} /s, linear {f.linear:.10f} /s"}))
         rows.append((f.scenario, f.engine, f.mode, f"{f.amplitude:.2e}", _cx(f.fitted),
                      _cx(f.linear), f"{f.deviation:.2e}", f"{f.tolerance:.1e}",
                      "pass" if ok else "FAIL"))
@@ -363,13 +364,13 @@ def _nonlinear_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
         ok = dev <= fit_tol
         rows.append((f.scenario, f.engine, _cx(f.fitted), _cx(r.fitted), f"{dev:.1e}",
                      "pass" if ok else "FAIL"))
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": "weave eigenvalue fit, engine vs reference (same run)",
             "scenario": f.scenario, "model": model.name,
             "engines": ["reference", f.engine], "max_error": dev,
             "tolerance": fit_tol, "passed": bool(ok),
             "localized_to": f"fitted {_cx(f.fitted)} vs {_cx(r.fitted)} /s",
-            "note": "same amplitude, so the nonlinearity cancels; (omega h)^2 integrator error"})
+            "note": "same amplitude, so the nonlinearity cancels; (omega h)^2 integrator error"}))
     sec.table(("scenario", "engine", "fitted [1/s]", "reference fit [1/s]", "rel. difference",
                "verdict"), rows)
     _order_part(sec, model, by_speed)
@@ -390,12 +391,12 @@ def _order_part(sec: Section, model: Model, by_speed: dict) -> None:
             ok = ORDER_BAND[0] <= order <= ORDER_BAND[1]
             rows.append((f"{g[0].speed:g} m/s", mode, f"{d[0]:.2e} / {d[1]:.2e}", f"{order:.3f}",
                          "pass" if ok else "FAIL"))
-            sec.comparisons.append({
+            sec.comparisons.append(Comparison.of({
                 "quantity": f"{mode} eigenvalue deviation: order in the amplitude",
                 "scenario": name, "model": model.name, "engines": ["reference (nonlinear)", "linearize"],
                 "max_error": abs(order - 2.0), "tolerance": ORDER_BAND[1] - 2.0,
                 "passed": bool(ok), "order": order, "localized_to": f"order {order:.3f}",
-                "note": f"a = {a[0]:.2e}, {a[1]:.2e} rad; deviation {d[0]:.2e}, {d[1]:.2e}"})
+                "note": f"a = {a[0]:.2e}, {a[1]:.2e} rad; deviation {d[0]:.2e}, {d[1]:.2e}"}))
             curves.append({"label": f"{g[0].speed:g} m/s {mode}: order {order:.2f}",
                            "a": [f.amplitude for f in g], "deviation": [f.deviation for f in g]})
     sec.table(("speed", "mode", "deviation at roll rate 1e-3 / 1e-2", "order in a", "verdict"), rows)
@@ -407,13 +408,13 @@ def _convergence_part(sec: Section, model: Model, label: str, study: Convergence
     ok = study.verdict == "converges"
     sec.heading(f"{label} convergence on the benchmark")
     sec.text(study.describe())
-    sec.comparisons.append({
+    sec.comparisons.append(Comparison.of({
         "quantity": "convergence order", "scenario": CONVERGENCE_SCENARIO, "model": model.name,
         "engines": ["reference", label], "max_error": study.difference, "tolerance": None,
         "order": study.order, "steps": list(study.steps), "errors": list(study.errors),
         "verdict": study.verdict, "expected": "converges", "passed": ok,
         "localized_to": f"order {study.order:.2f}, worst coordinate {study.worst[-1]}",
-        "reason": study.verdict_reason})
+        "reason": study.verdict_reason}))
 
 
 def _eigenvalue_part(tols: Tolerances, sec: Section, model: Model) -> None:
@@ -429,20 +430,20 @@ def _eigenvalue_part(tols: Tolerances, sec: Section, model: Model) -> None:
         if e > err:
             err, worst = e, f"v = {v} m/s"
     tol = tols["benchmark_eigenvalues"]
-    sec.comparisons.append({
+    sec.comparisons.append(Comparison.of({
         "quantity": "eigenvalues vs Meijaard 2007 Table 2", "scenario": "benchmark upright, v = 0..10",
         "model": MODEL, "engines": ["reference", "published"], "max_error": err,
         "tolerance": tol.tolerance, "passed": bool(err <= tol.tolerance), "localized_to": worst,
-        "note": "exact linearization (complex step), 4 eigenvalues at 11 speeds"})
+        "note": "exact linearization (complex step), 4 eigenvalues at 11 speeds"}))
     speeds = {"weave speed": (weave_speed(model), MEIJAARD_WEAVE_SPEED),
               "capsize speed": (capsize_speed(model), MEIJAARD_CAPSIZE_SPEED)}
     tol_s = tols["benchmark_speeds"]
     for name, (ours, theirs) in speeds.items():
         e = abs(ours - theirs)
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": f"{name} vs Meijaard 2007", "scenario": "benchmark upright", "model": MODEL,
             "engines": ["reference", "published"], "max_error": e, "tolerance": tol_s.tolerance,
-            "passed": bool(e <= tol_s.tolerance), "localized_to": f"{ours:.14f} m/s"})
+            "passed": bool(e <= tol_s.tolerance), "localized_to": f"{ours:.14f} m/s"}))
     sec.heading("Linear stability against the published Table 2")
     sec.text("Linearized about upright straight running (roll and steer; exact derivatives), "
              "against the published Table 2:")

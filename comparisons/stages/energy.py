@@ -13,6 +13,7 @@ from reference_model import load_model
 
 from ..judgments.energy import describe_drift, energy_drifts, free_roll_model
 from ..judgments.tolerances import Tolerances
+from ..judgments.rows import Comparison
 from .results import Section
 from .stage import Assembled, Plan, Stage
 
@@ -123,19 +124,19 @@ def energy_section(tolerances: Tolerances, engines: tuple[tuple[str, dict], ...]
             continue
         if "failed" in r:   # asked for and not made: the engine's failure, counted
             table.append((r["engine"], "-", "-", "-", "FAIL", r["failed"]))
-            sec.comparisons.append({"quantity": "energy drift percent", "scenario": "free-roll",
+            sec.comparisons.append(Comparison.of({"quantity": "energy drift percent", "scenario": "free-roll",
                                     "model": f"{free.name} (cv = 0)", "engines": [r["engine"]],
                                     "max_error": None, "tolerance": tol.tolerance,
-                                    "passed": False, "localized_to": r["failed"]})
+                                    "passed": False, "localized_to": r["failed"]}))
             continue
         ok = r["status"] != "failed" and r["drift_percent"] <= tol.tolerance
         table.append((r["engine"], r["settings"], f"{r['E0']:.3f}", f"{r['drift_percent']:.2e}",
                       "pass" if ok else "FAIL", f"{r['status']} at {r['t_end']:.2f} s"))
-        sec.comparisons.append({"quantity": "energy drift percent", "scenario": "free-roll",
+        sec.comparisons.append(Comparison.of({"quantity": "energy drift percent", "scenario": "free-roll",
                                 "model": f"{free.name} (cv = 0)", "engines": [r["engine"]],
                                 "max_error": r["drift_percent"], "tolerance": tol.tolerance,
                                 "passed": bool(ok), "localized_to": r["settings"],
-                                "note": describe_drift(r)})
+                                "note": describe_drift(r)}))
     sec.table(("engine", "settings", "E0 [J]", "drift [% of E0]", "verdict", "status"), table)
     return sec
 

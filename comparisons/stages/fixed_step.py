@@ -25,6 +25,7 @@ from reference_model.scenarios import SCENARIOS
 
 from ..judgments.convergence import (DEFAULT_STEPS, convergence_study, error_vs_time,
                                      reference_horizon, reference_run)
+from ..judgments.rows import Comparison
 from .results import Figure, Section
 from .stage import Assembled, Plan, Stage
 
@@ -100,13 +101,13 @@ def trajectory_part(spec: str, name: str) -> TrajectoryPart:
         rows.append((name, f"{hor.t:.2f}", hor.limited_by, label, f"{worst:.2e}",
                      first or f"none (all below {DIVERGED:g})",
                      f"{traj.t_end:.3f} s ({traj.status}{', run to the horizon' if cut.grid[2] < n else ''})"))
-        comparisons.append({
+        comparisons.append(Comparison.of({
             "quantity": "trajectory (disc builds)", "scenario": name,
             "model": "thesis-disc", "engines": ["reference", label],
             "max_error": worst, "tolerance": None, "passed": None,
             "horizon": hor.t, "horizon_reason": hor.reason, "localized_to": first or "-",
             "note": f"reported, not judged: the convergence study judges {facts.label}'s "
-                    "trajectories"})
+                    "trajectories"}))
         curves[label] = {"t": err["t"], "theta": err["theta"], "xc": err["xc"]}
     fig = Figure(f"{_slug(facts.name)}_error_{name}.png", "error_vs_time",
                  dict(curves=curves, horizon=hor.t, threshold=DIVERGED, engine_label=facts.label,
@@ -143,14 +144,14 @@ def _convergence_row(sec: Section, label: str, eng_model, ref_model, study, expe
     rows.append((f"{label}, {eng_model.contact} contact", ref_model.name,
                  ", ".join(f"{e:.2e}" for e in study.errors), f"{study.order:.2f}",
                  study.verdict, expected + (f" ({why})" if why else ""), "yes" if ok else "NO"))
-    sec.comparisons.append({
+    sec.comparisons.append(Comparison.of({
         "quantity": "convergence order", "scenario": scenario, "model": ref_model.name,
         "engines": ["reference", f"{label.replace(' ', '-')}-{eng_model.contact}"],
         "max_error": study.difference, "tolerance": None, "order": study.order,
         "steps": list(study.steps), "errors": list(study.errors), "verdict": study.verdict,
         "expected": expected, "passed": ok, "reason": study.verdict_reason,
         "localized_to": f"order {study.order:.2f}: {study.verdict}"
-                        + (" (expected: declared model difference)" if why else "")})
+                        + (" (expected: declared model difference)" if why else "")}))
     curves.append({"label": f"{label} ({eng_model.contact}) vs reference {ref_model.name}: "
                             f"order {study.order:.2f}",
                    "steps": list(study.steps), "errors": list(study.errors)})

@@ -17,6 +17,7 @@ from reference_model import load_model
 
 from ..judgments.linear_check import LinearCheck, SpeedCheck, linear_benchmark_check
 from ..judgments.tolerances import Tolerances
+from ..judgments.rows import Comparison
 from .results import Section, num
 from .stability import SPEED_RANGE
 from .stage import Assembled, Plan, Stage
@@ -49,10 +50,10 @@ def linear_check_section(check: LinearCheck) -> Section:
     scenario = f"{check.model}, upright straight running"
     if not check.applicable:
         sec.text(f"Not applicable: {check.reason}.")
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": "linearization vs closed form", "scenario": scenario,
             "model": check.model, "engines": ENGINES, "max_error": None, "tolerance": None,
-            "passed": None, "localized_to": "-", "note": f"not applicable: {check.reason}"})
+            "passed": None, "localized_to": "-", "note": f"not applicable: {check.reason}"}))
         return sec
     lo, hi = check.speeds_range
     sec.text(
@@ -67,22 +68,22 @@ def linear_check_section(check: LinearCheck) -> Section:
     for c in check.matrices:
         rows.append((c.name, f"{c.error:.1e}", f"{c.tolerance:.0e}",
                      "pass" if c.passed else "FAIL", c.worst))
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": f"linearization vs closed form: {c.name}", "scenario": scenario,
             "model": check.model, "engines": ENGINES, "max_error": c.error,
             "tolerance": c.tolerance, "passed": c.passed, "localized_to": c.worst,
-            "note": "max |difference| / max |closed form| over the matrix"})
+            "note": "max |difference| / max |closed form| over the matrix"}))
     sec.table(("matrix", "max relative difference", "tolerance", "verdict", "worst entry"), rows)
     rows = []
     for s in check.speeds:
         rows.append((f"{s.mode} speed", _speed(s.closed_form), _speed(s.linearization),
                      num(s.difference), f"{s.tolerance:.0e}", "pass" if s.passed else "FAIL"))
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": f"linearization vs closed form: {s.mode} speed", "scenario": scenario,
             "model": check.model, "engines": ENGINES, "max_error": s.difference,
             "tolerance": s.tolerance, "passed": s.passed, "closed_form": s.closed_form,
             "linearization": s.linearization, "localized_to": _where(s, lo, hi),
-            "note": f"in {lo:g}-{hi:g} m/s; none on both counts as agreement"})
+            "note": f"in {lo:g}-{hi:g} m/s; none on both counts as agreement"}))
     sec.table(("critical speed", "closed form [m/s]", "linearization [m/s]", "difference [m/s]",
                "tolerance", "verdict"), rows)
     return sec

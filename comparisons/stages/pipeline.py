@@ -40,6 +40,7 @@ from engines.runs import Run
 
 from .. import provenance
 from ..judgments.claims import judge_claims
+from ..judgments.rows import Comparison
 from ..judgments.tolerances import Tolerances, load_tolerances
 from ..judgments.summary import summary_table
 from .catalog import SECTIONS as _SECTIONS, STAGES
@@ -315,6 +316,10 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         fault_rows += part.faults
 
     comparisons = [c for s in sections for c in s.comparisons]
+    stray = [c for c in comparisons if not isinstance(c, Comparison)]
+    if stray:   # every row is made typed where it is judged; a dict here is a bug to fix there
+        raise TypeError(f"comparison rows must be judgments.rows.Comparison; got "
+                        f"{type(stray[0]).__name__} for {stray[0].get('quantity')!r}")
     sections = [apply_figure_policy(sec, opts.figure_policy) for sec in sections]
     localization = faults.localization_lines(opts.tolerances, comparisons, by_label,
                                              {m.name: m.spec for m in opts.models})

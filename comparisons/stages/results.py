@@ -1,9 +1,9 @@
 """What a stage of `bicycle-xval run` returns: a section of plain data, no files, no drawing.
 
 A stage computes; the report package renders. A `Section` is a title, an ordered list of blocks
-(`Text`, `Table`, `Figure`) and the comparisons it judged (the dicts of summary.json's
-``comparisons``: quantity, scenario, model, engines, max_error, tolerance, passed,
-localized_to, note...). A `Figure` names a drawing of `comparisons.report.figures` and carries
+(`Text`, `Table`, `Figure`) and the comparisons it judged (`judgments.rows.Comparison`, the
+rows of summary.json's ``comparisons``: quantity, scenario, model, engines, max_error,
+tolerance, passed, localized_to, note, and what one kind of row adds). A `Figure` names a drawing of `comparisons.report.figures` and carries
 the arrays it needs, so figures are drawn once, by the writer, into the output folder it owns.
 
 Everything here is picklable: stages run in worker processes.
@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any, Union
+
+from ..judgments.rows import Comparison
 
 
 @dataclass(frozen=True)
@@ -63,7 +65,7 @@ class Section:
 
     title: str
     blocks: list[Block] = field(default_factory=list)
-    comparisons: list[dict] = field(default_factory=list)
+    comparisons: list[Comparison] = field(default_factory=list)
     seconds: float = 0.0
 
     def text(self, *paragraphs: str) -> None:

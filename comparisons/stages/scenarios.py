@@ -21,6 +21,7 @@ from ..judgments.scenario_compare import (compare_constraints, compare_forward, 
                                           compare_mass_matrix, constraint_series,
                                           trajectory_error)
 from ..judgments.tolerances import Tolerances
+from ..judgments.rows import Comparison
 from .results import Section, num, verdict_word
 
 CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative to Mped
@@ -78,11 +79,11 @@ def _build_if_it_models(setup, model, failures: list[dict]):
     except UnsupportedModel:
         return None
     except Exception as exc:   # noqa: BLE001 - an engine failure is a result, not a crash
-        failures.append({"quantity": "engine build", "scenario": "-", "model": model.name,
+        failures.append(Comparison.of({"quantity": "engine build", "scenario": "-", "model": model.name,
                          "engines": [setup.label], "max_error": None, "tolerance": None,
                          "passed": False,
                          "localized_to": f"{type(exc).__name__}: {' '.join(str(exc).split())[:300]}",
-                         "note": f"{setup.label} raised while being built on {model.name}"})
+                         "note": f"{setup.label} raised while being built on {model.name}"}))
         return None
 
 
@@ -122,10 +123,10 @@ def compare_scenarios(tolerances: Tolerances, names, setups: dict, runs: dict, h
                 if (lab, name) in runs and runs[(lab, name)].status != "not run"}
         for lab, r in here.items():   # asked for and not made: that engine's failure, counted
             if lab != "reference" and r.status == "failed":
-                comps.append({"quantity": "engine run", "scenario": name, "model": model.name,
+                comps.append(Comparison.of({"quantity": "engine run", "scenario": name, "model": model.name,
                               "engines": [lab], "max_error": None, "tolerance": None,
                               "passed": False, "localized_to": r.message[:300],
-                              "note": f"{lab} did not complete the run it was asked for"})
+                              "note": f"{lab} did not complete the run it was asked for"}))
         if "mass_matrix" in sc.compared and ref.t.size:
             step = max(1, len(ref.t) // M_STATES)
             engines = {}

@@ -36,6 +36,7 @@ from reference_model.scenarios import SCENARIOS, torque_input
 from ..judgments.contact import contact_fidelity, lift_off_time, refinement_study
 from ..judgments.convergence import HORIZON_THRESHOLD, meaningful_horizon, perturbed_scenario, \
     reference_run
+from ..judgments.rows import Comparison
 from .cases import slug
 from .results import Section
 from .stage import Assembled, Plan, Stage
@@ -148,7 +149,7 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
                      f"{f.penetration_rms:.2e}", f"{f.error_max:.2e}"))
     # summary.json: the loaded part only (past a lift-off the models differ in kind)
     f = fid_loaded
-    sec.comparisons.append({
+    sec.comparisons.append(Comparison.of({
         "quantity": "contact fidelity (slip, penetration, trajectory)", "scenario": sc.name,
         "model": model.name, "engines": ["reference", facts.name], "max_error": f.error_max,
         "tolerance": None, "passed": None, "horizon": f.horizon,
@@ -157,7 +158,7 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
         "lift_off_s": lift, "ideal_pull_s": float(ref.t[pull[0]]) if pull.size else None,
         "localized_to": f"slip max {f.slip_max:.1e} m/s ({f.slip_worst})",
         "note": "while both wheels are loaded; reported, not judged: a declared model "
-                "difference (soft contact)"})
+                "difference (soft contact)"}))
     sec.table(("up to", "slip max [m/s]", "slip RMS [m/s]", "penetration max [m]",
                "penetration RMS [m]", "max error, 8 coordinates [rad, m]"), rows,
               note="Slip: speed of each wheel's contact point (the disc's lowest point) in the "
@@ -193,14 +194,14 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
                      ", ".join(f"{e:.2e}" for e in st.errors),
                      ", ".join(f"{x:.2e}" for x in st.slip_rms),
                      ", ".join(f"{o:.2f}" for o in st.orders), f"{st.order:.2f}", st.verdict))
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": f"contact refinement ({st.parameter.split(' [')[0]}, {st.held})",
             "scenario": sc.name, "model": model.name, "engines": ["reference", facts.name],
             "max_error": min(st.errors), "tolerance": None, "passed": None,
             "order": st.order, "values": list(st.values), "errors": list(st.errors),
             "slip_rms": list(st.slip_rms), "verdict": st.verdict, "reason": st.verdict_reason,
             "localized_to": f"order {st.order:.2f}: {st.verdict}",
-            "note": "reported, not judged: a declared model difference (soft contact)"})
+            "note": "reported, not judged: a declared model difference (soft contact)"}))
     sec.table(("refined", "held", "values", f"error at {STUDY_TIME:g} s [rad, m]",
                "slip RMS [m/s]", "local orders", "fitted order", "verdict"), rows,
               note="Error: max over the eight coordinates at the grid time "

@@ -39,6 +39,7 @@ from reference_model import Model, load_model
 from reference_model.scenarios import Scenario
 
 from ..judgments.benchmark import _cx, _pick, identify_eigenvalues, roll_rate_envelope
+from ..judgments.rows import Comparison
 from .results import Section
 from .stage import Assembled, Plan, Stage
 
@@ -177,20 +178,20 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
             rows.append((mode, f"{factor:g} x = {speed:.4f}", label, f"{j['predicted']:+.4f}",
                          f"{j['measured']:+.4f}", f"{mode} {j['expected']}",
                          "pass" if j["passed"] else "FAIL", j["how"]))
-            sec.comparisons.append({
+            sec.comparisons.append(Comparison.of({
                 "quantity": f"stability: {mode} {j['expected']} (sign of its real part)",
                 "scenario": f"{m.name} at {speed:.4f} m/s ({factor:g} x {mode} speed)",
                 "model": m.name, "engines": [label], "max_error": None, "tolerance": None,
                 "passed": j["passed"], "measured": j["measured"], "predicted": j["expected"],
                 "linear": j["predicted"], "localized_to": f"measured {j['measured']:+.4f} /s",
-                "note": j["how"]})
+                "note": j["how"]}))
         for label in [lab for lab in labels if (mode, speed, lab) in errors]:
             err = errors[(mode, speed, label)]
             rows.append((mode, f"{factor:g} x = {speed:.4f}", label, "-", "-", "-", "FAIL", err))
-            sec.comparisons.append({
+            sec.comparisons.append(Comparison.of({
                 "quantity": f"stability: {mode} run", "scenario": f"{m.name} at {speed:.4f} m/s",
                 "model": m.name, "engines": [label], "max_error": None, "tolerance": None,
-                "passed": False, "localized_to": err})
+                "passed": False, "localized_to": err}))
         panels.append({"title": f"{m.name}: {factor:g} x {mode} speed = {speed:.4f} m/s",
                        "lines": lines})
     sec.table(("mode", "speed [m/s]", "engine", "linear real part [1/s]", "measured [1/s]",

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ..judgments.rows import Comparison
 from .results import Section
 
 __all__ = ["Assembled", "Plan", "Stage", "failed_section"]
@@ -64,9 +65,9 @@ def failed_section(title: str, error: str) -> Section:
     """A stage that raised, as a section with one failing row (counted in the verdict)."""
     sec = Section(title)
     sec.text(f"**This stage failed**: {error}")
-    sec.comparisons.append({"quantity": "stage", "scenario": title, "model": "-",
+    sec.comparisons.append(Comparison.of({"quantity": "stage", "scenario": title, "model": "-",
                             "engines": ["-"], "max_error": None, "tolerance": None,
-                            "passed": False, "localized_to": error})
+                            "passed": False, "localized_to": error}))
     return sec
 
 

@@ -17,6 +17,7 @@ from reference_model import COORDINATES, load_model
 
 from ..judgments.terms import compare_terms, random_states
 from ..judgments.tolerances import Tolerances
+from ..judgments.rows import Comparison
 from .results import Section
 from .stage import Assembled, Plan, Stage
 
@@ -35,10 +36,10 @@ def term_rows(sec: Section, results, model_name: str, engines: list[str], scenar
     for r in results:
         rows.append(prefix + (r.quantity, f"{r.max_error:.1e}", f"{r.tolerance:.0e}",
                               "pass" if r.passed else "FAIL", r.worst_entry))
-        sec.comparisons.append({
+        sec.comparisons.append(Comparison.of({
             "quantity": r.quantity, "scenario": scenario, "model": model_name,
             "engines": engines, "max_error": r.max_error, "tolerance": r.tolerance,
-            "passed": r.passed, "localized_to": r.worst_entry})
+            "passed": r.passed, "localized_to": r.worst_entry}))
     return rows
 
 
@@ -58,9 +59,9 @@ def _terms_on_models(tolerances: Tolerances, sec: Section, spec: str, label: str
         except Exception as exc:   # noqa: BLE001 - the engine failed: a result, counted
             why = f"{type(exc).__name__}: {' '.join(str(exc).split())[:300]}"
             rows.append((model.name, "-", "-", "-", "FAIL", why))
-            sec.comparisons.append({"quantity": "engine build", "scenario": "-",
+            sec.comparisons.append(Comparison.of({"quantity": "engine build", "scenario": "-",
                                     "model": model.name, "engines": [label], "max_error": None,
-                                    "tolerance": None, "passed": False, "localized_to": why})
+                                    "tolerance": None, "passed": False, "localized_to": why}))
             continue
         built[name] = ref, eng = load_engine("reference", model), eng
         rows += term_rows(sec, compare_terms(ref, eng, states, tolerances), model.name,

@@ -77,7 +77,8 @@ class MjcfSettings:
     """What MuJoCo needs beyond the bicycle's parameters: the contact and the time stepping.
 
     Defaults: the settings closest to ideal rolling at a 1e-4 s step, found by the contact
-    study of `bicycle-xval run` (comparisons/stages/mujoco_contact.py): the slip and the
+    study of `bicycle-xval run` (comparisons/stages/soft_contact.py; MuJoCo's share in
+    engines/mujoco/contact_study.py): the slip and the
     trajectory error shrink in proportion to the solref time constant (not with the step
     alone; solimp, impratio, cone, condim, noslip iterations change neither the slip),
     MuJoCo honours time constants down to two steps, so tc = 2 h; the implicit
