@@ -91,14 +91,18 @@ def chunk_size(spec: SweepSpec) -> int:
     return max(1, min(MAX_CHUNK, int(TARGET_SECONDS / max(bicycle_cost(spec), 1e-6))))
 
 
-def plan(spec: SweepSpec) -> list[tuple[int, ...]]:
-    """The chunks: consecutive bicycle indices."""
+def plan(spec: SweepSpec) -> list[range]:
+    """The chunks: consecutive bicycle indices (ranges: a large sweep's plan stays small)."""
     n, size = spec.n_bicycles, chunk_size(spec)
-    return [tuple(range(s, min(s + size, n))) for s in range(0, n, size)]
+    return [range(s, min(s + size, n)) for s in range(0, n, size)]
+
+
+def chunk_name(i: int, writer: str = "parquet") -> str:
+    return f"chunk-{i:06d}{WRITERS[writer]}"
 
 
 def chunk_path(out: Path, h: str, i: int, writer: str = "parquet") -> Path:
-    return Path(out) / "chunks" / h / f"chunk-{i:06d}{WRITERS[writer]}"
+    return Path(out) / "chunks" / h / chunk_name(i, writer)
 
 
 def stamp_of(h: str, bicycles) -> ChunkStamp:
@@ -243,11 +247,13 @@ def believed_chunks(spec: SweepSpec, out: Path, h: str, chunks, writer: str, say
     cols = columns(spec)
     frames: dict = {}
     todo = []
-    for i, c in enumerate(chunks):
-        path = chunk_path(out, h, i, writer)
-        if not path.exists():
+    folder = chunk_path(out, h, 0, writer).parent
+    present = set(os.listdir(folder)) if folder.is_dir() else set()   # one listing, not a
+    for i, c in enumerate(chunks):                                    # path and stat per chunk
+        if chunk_name(i, writer) not in present:
             todo.append((i, c))
             continue
+        path = folder / chunk_name(i, writer)
         try:
             frames[i] = rows_frame(spec, read_chunk(path, stamp_of(h, c), cols))
         except ChunkMismatch as why:

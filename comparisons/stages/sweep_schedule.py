@@ -52,10 +52,19 @@ def compute(client, spec: SweepSpec, todo, limit: float, on_chunk, on_bicycles=N
     h = spec_hash(spec)
     workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
     window = PER_WORKER * workers
-    pending = deque(Work(i, tuple(c)) for i, c in todo)
+    fresh = iter(todo)                        # chunks not submitted yet (made as they go)
+    pending: deque[Work] = deque()
     alone: deque[Work] = deque()
-    rows: dict[int, list[dict]] = {i: [] for i, _ in todo}
-    left = {i: 1 for i, _ in todo}            # tasks outstanding per chunk
+    rows: dict[int, list[dict]] = {}
+    left: dict[int, int] = {}                 # tasks outstanding per chunk submitted
+
+    def refill() -> None:
+        if not pending:
+            for i, c in fresh:
+                rows[i], left[i] = [], 1
+                pending.append(Work(i, tuple(c)))
+                return
+
     flight: dict = {}
     done = as_completed()
     lost = 0
@@ -67,9 +76,11 @@ def compute(client, spec: SweepSpec, todo, limit: float, on_chunk, on_bicycles=N
         flight[f] = w
         done.add(f)
 
+    refill()
     while pending or alone or flight:
         while pending and len(flight) < window:
             submit(pending.popleft())
+            refill()
         if not flight:                         # every other task finished: one suspect alone
             submit(alone.popleft())
         for fut in _finished(done, check):
