@@ -148,10 +148,14 @@ def test_a_csv_chunk_cut_at_a_row_boundary_or_edited_is_not_believed(tmp_path, s
 
 
 def test_the_csv_writer_reads_back_what_parquet_holds(tmp_path, spec, client):
-    """The two writers give the same rows (every number read back exactly)."""
+    """The two writers give the same rows (every number read back exactly), and the sweep's
+    report reads either results file."""
+    from comparisons.report.sweep_report import write_sweep_report
     a = _results(_sweep(spec, tmp_path / "p", client, "parquet")[0]).drop(columns="task_seconds")
-    b = _results(_sweep(spec, tmp_path / "c", client, "csv")[0]).drop(columns="task_seconds")
-    b = sweep_stage.rows_frame(spec, b).drop(columns="task_seconds")
+    res = _sweep(spec, tmp_path / "c", client, "csv")[0]
+    b = sweep_stage.rows_frame(spec, _results(res)).drop(columns="task_seconds")
+    summary = write_sweep_report(spec, res)
+    assert summary["agree"] == 3 and "`results.csv`" in (tmp_path / "c" / "report.md").read_text()
     for c in a.columns:
         if a[c].dtype == np.float64:
             np.testing.assert_array_equal(a[c].to_numpy(), b[c].to_numpy(), err_msg=c)

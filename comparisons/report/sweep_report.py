@@ -93,9 +93,10 @@ def summarize(frame) -> dict:
 def write_sweep_report(spec, result) -> dict:
     """Write report.md, agreement.png and stability.png into the sweep's folder; the counts
     by status and the report's path."""
+    from ..stages.sweep import rows_frame
     from ..stages.sweep_chunks import read_table
     out = Path(result.out)
-    frame, _ = read_table(result.results)
+    frame = rows_frame(spec, read_table(result.results)[0])   # Parquet or CSV, same dtypes
     counts = summarize(frame)
     axes = _axes(spec, frame)
     lines = [f"# Sweep {result.hash}: {spec.n_bicycles} bicycles around "
