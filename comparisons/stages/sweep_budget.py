@@ -70,9 +70,11 @@ class Estimate:
 
 
 def duration(seconds: float) -> str:
-    """A duration for people: 40 s, 12 min, 3.5 h, 2.1 days."""
+    """A duration for people: under a second, 40 s, 12 min, 3.5 h, 2.1 days."""
     if not math.isfinite(seconds):
         return "an unknown time"
+    if seconds < 1:
+        return "under a second"
     if seconds < 90:
         return f"{seconds:.0f} s"
     if seconds < 5400:
