@@ -20,6 +20,7 @@ from comparisons.stages.sweep_spec import SpecError, make_spec, sample_parameter
 from comparisons.stages.sweep_task import chunk_rows, columns
 from reference_model import load_model
 from reference_model.params import PARAMETER_NAMES
+from sweep_engines import local_client
 
 # Meijaard et al. (2007), section 5 / Table 2: the benchmark's weave and capsize speeds, 14
 # significant digits; 1e-9 m/s is the bound (the critical speeds are root-found to
@@ -49,13 +50,8 @@ def benchmark_params():
 
 @pytest.fixture(scope="module")
 def client():
-    from distributed import Client, LocalCluster
-    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                           dashboard_address=None, silence_logs=50)
-    c = Client(cluster)
-    yield c
-    c.close()
-    cluster.close()
+    with local_client() as c:
+        yield c
 
 
 @pytest.fixture(scope="module")

@@ -23,41 +23,13 @@ from comparisons.stages.sweep_chunks import read_chunk, read_table
 from comparisons.stages.sweep_spec import make_spec, spec_hash
 from comparisons.stages.sweep_task import columns
 from reference_model import load_model
+from sweep_engines import hostile_engines
 
 ROOT = Path(__file__).resolve().parents[1]
 
-HOSTILE = '''
-import os
-import time
-from engines.base import Engine
-
-class Killer(Engine):
-    """The reference's M; ends its process (os._exit) for a rider lighter than 85 kg."""
-    name = "killer"
-    capabilities = frozenset({"mass_matrix"})
-
-    def mass_matrix(self, q):
-        if self.model.params.m3 < 85.0:
-            os._exit(3)
-        return self.model.mass_matrix(q)
-
-class Sleeper(Engine):
-    """The reference's M; hangs for a rider heavier than 85 kg."""
-    name = "sleeper"
-    capabilities = frozenset({"mass_matrix"})
-
-    def mass_matrix(self, q):
-        if self.model.params.m3 > 85.0:
-            time.sleep(600)
-        return self.model.mass_matrix(q)
-'''
-
-
 @pytest.fixture
 def hostile(tmp_path):
-    path = tmp_path / "hostile.py"
-    path.write_text(HOSTILE)
-    return path
+    return hostile_engines(tmp_path)
 
 
 def test_a_bicycle_that_kills_its_worker_is_the_only_failed_row(tmp_path, hostile, monkeypatch):
@@ -88,7 +60,7 @@ import sys
 from comparisons.stages import sweep
 sweep.TARGET_SECONDS = 1e-6            # one bicycle a chunk
 from comparisons.cli.main import main
-sys.exit(main(sys.argv[1:]))
+sys.exit(main())                       # argv None: the command as the program runs it
 """
 
 
