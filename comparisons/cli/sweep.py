@@ -115,7 +115,11 @@ def cmd_sweep(args) -> int:
         print(f"bicycle-xval: {what}; the finished chunks are kept in "
               f"{args.out / 'chunks' / spec_hash(spec)}: rerun the same command to resume",
               file=sys.stderr)
-        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+        code = EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+        if getattr(args, "as_program", False):   # cluster closed, chunks on disk: skip the
+            from ..stages.signals import exit_at_once   # interpreter's shutdown (~1.4 s here)
+            exit_at_once(code)
+        return code
     except OSError as exc:
         if args.scheduler and not isinstance(exc, (FileNotFoundError, PermissionError)):
             raise UsageError(f"--scheduler {args.scheduler}: cannot connect ({exc}); start one "

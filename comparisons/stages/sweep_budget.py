@@ -84,6 +84,10 @@ def duration(seconds: float) -> str:
     return f"{seconds / 86400:.1f} days"
 
 
+def _about(when: str) -> str:
+    return when if when.startswith("under") else f"about {when}"
+
+
 def estimate_line(e: Estimate) -> str:
     """One line: bicycles, chunks, what is left and the expected time (module docstring)."""
     source = (f"measured on the {e.measured_on} bicycles done" if e.measured_on
@@ -91,7 +95,7 @@ def estimate_line(e: Estimate) -> str:
     where = f"on {e.workers} worker{'s' if e.workers != 1 else ''}" if e.workers else "on one worker"
     done = e.chunks - e.chunks_left
     return (f"sweep: {e.n_bicycles} bicycles in {e.chunks} chunks ({done} already done); "
-            f"{e.bicycles_left} to compute, about {duration(e.seconds)} {where} "
+            f"{e.bicycles_left} to compute, {_about(duration(e.seconds))} {where} "
             f"at {e.cost:.3g} s a bicycle ({source}); each bicycle given up after "
             f"{e.limit:g} s")
 
