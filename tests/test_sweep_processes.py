@@ -2,9 +2,10 @@
 worker, and Ctrl-C / SIGTERM to a running sweep. Both run real worker processes (a LocalCluster
 of processes, the sweep command in its own session), never this test process's threads.
 
-Cost on the 2-core machine (quiet; twice that under a load average of 7): the worker death
-~6-8 s (a cluster start and two worker restarts, each a fresh interpreter loading the model),
-Ctrl-C ~5-6 s (the command's start, its cluster's, one chunk).
+Cost, measured on the 2-core machine shared with three other suites (load average 7-14): the
+worker death 20-50 s (a cluster start, 2.2 s alone, and two worker restarts, 1.4-2.4 s each
+alone, each a fresh interpreter loading the model), Ctrl-C 12-27 s (the command's start, its
+cluster's, one chunk). Not measured on a quiet machine.
 """
 
 from __future__ import annotations
