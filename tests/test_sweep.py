@@ -20,6 +20,7 @@ from comparisons.stages.sweep_spec import SpecError, make_spec, sample_parameter
 from comparisons.stages.sweep_task import chunk_rows, columns
 from reference_model import load_model
 from reference_model.params import PARAMETER_NAMES
+from sweep_engines import local_client
 
 # Meijaard et al. (2007), section 5 / Table 2: the benchmark's weave and capsize speeds, 14
 # significant digits; 1e-9 m/s is the issue's bound (the critical speeds are root-found to
@@ -49,13 +50,8 @@ def benchmark_params():
 
 @pytest.fixture(scope="module")
 def client():
-    from distributed import Client, LocalCluster
-    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                           dashboard_address=None, silence_logs=50)
-    c = Client(cluster)
-    yield c
-    c.close()
-    cluster.close()
+    with local_client() as c:
+        yield c
 
 
 @pytest.fixture(scope="module")
@@ -156,23 +152,23 @@ def test_identical_spec_identical_rows_in_any_order(tiny):
 def test_a_lost_task_becomes_a_failed_row_for_its_bicycle_only(tmp_path, benchmark_params,
                                                                 client, monkeypatch):
     """A task whose worker dies (Dask gives up with KilledWorker, as measured with a real
-    os._exit in a worker process) is split per bicycle; only the bicycle that loses its task
-    again is a failed row."""
+    os._exit in a worker process: tests/test_sweep_processes.py) is split per bicycle, each run
+    alone; only the bicycle that loses its task again is a failed row."""
     spec = make_spec(benchmark_params, varies=["m3=80:90:2"], engines=("pinocchio",),
                      checks=("eigen",))
     assert len(plan(spec)) == 1
-    real = sweep_stage.chunk_rows
+    real = sweep_stage.limited_chunk_rows
 
-    def dies_on_bicycle_1(spec, indices):
+    def dies_on_bicycle_1(spec, indices, limit):
         if 1 in indices:
             raise RuntimeError("worker tcp://127.0.0.1:1 died")
-        return real(spec, indices)
-    monkeypatch.setattr(sweep_stage, "chunk_rows", dies_on_bicycle_1)
+        return real(spec, indices, limit)
+    monkeypatch.setattr(sweep_stage, "limited_chunk_rows", dies_on_bicycle_1)
     res = run_sweep(spec, tmp_path, client=client, progress=False)
     frame = pd.read_parquet(tmp_path / "results.parquet")
     assert res.failed_tasks == 2                   # the chunk, then bicycle 1 alone
     assert list(frame["status"]) == ["agree", "failed"]
-    assert frame["failures"][1].startswith("task lost: RuntimeError: worker")
+    assert frame["failures"][1].startswith("task lost when run alone: RuntimeError: worker")
     assert list(frame["vary.m3"]) == [80.0, 90.0] and np.isfinite(frame["weave_speed"][0])
 
 

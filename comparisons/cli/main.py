@@ -357,6 +357,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         args = build_parser().parse_args(_join_signed_values(argv))
+        args.as_program = as_program      # a command that ends on an interrupt may exit at once
         return args.func(args)
     except (UsageError, ParameterError, UnknownScenarioError, EngineSpecError) as exc:
         print(f"bicycle-xval: error: {exc}", file=sys.stderr)

@@ -26,7 +26,7 @@ from .figures import _plt, png_bytes
 from .markdown import cell, inline
 from ..stages.files import write_bytes, write_text
 
-MAX_LISTED = 200      # disagreeing bicycles listed in report.md (all are in results.parquet)
+MAX_LISTED = 200      # disagreeing bicycles listed in report.md (all are in the results file)
 
 
 def _axes(spec, frame) -> list[tuple[str, str]]:
@@ -93,10 +93,10 @@ def summarize(frame) -> dict:
 def write_sweep_report(spec, result) -> dict:
     """Write report.md, agreement.png and stability.png into the sweep's folder; the counts
     by status and the report's path."""
-    import pandas as pd
-
+    from ..stages.sweep import rows_frame
+    from ..stages.sweep_chunks import read_table
     out = Path(result.out)
-    frame = pd.read_parquet(result.results)
+    frame = rows_frame(spec, read_table(result.results)[0])   # Parquet or CSV, same dtypes
     counts = summarize(frame)
     axes = _axes(spec, frame)
     lines = [f"# Sweep {result.hash}: {spec.n_bicycles} bicycles around "
@@ -110,7 +110,7 @@ def write_sweep_report(spec, result) -> dict:
               f"{inline(spec.tolerances.source or 'the packaged tolerances.toml')} (their "
               "values are in `spec.json` and the hash).", "",
               f"**{counts['agree']} agree, {counts['disagree']} disagree, {counts['failed']} "
-              f"failed, {counts['invalid']} invalid.** Every row: `results.parquet` (columns: "
+              f"failed, {counts['invalid']} invalid.** Every row: `{Path(result.results).name}` (columns: "
               "`comparisons/stages/sweep_task.py`).", ""]
     times = frame["task_seconds"].to_numpy(dtype=float)
     if np.isfinite(times).any():
@@ -143,7 +143,7 @@ def write_sweep_report(spec, result) -> dict:
             lines.append(f"| {cell(r['bicycle'])} | {vals} | {cell(r['status'])} | "
                          f"{cell(r['failures'] or '')} | {cell(loc or '')} |")
         if len(bad) > MAX_LISTED:
-            lines += ["", f"... and {len(bad) - MAX_LISTED} more in results.parquet."]
+            lines += ["", f"... and {len(bad) - MAX_LISTED} more in {Path(result.results).name}."]
         lines.append("")
     path = write_text(out / "report.md", "\n".join(lines))
     return {**counts, "report": path}
