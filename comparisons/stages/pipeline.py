@@ -46,7 +46,8 @@ from .. import provenance
 from ..judgments.claims import judge_claims
 from ..judgments.tolerances import Tolerances, load_tolerances
 from ..judgments.summary import summary_table
-from .pool import Task, run_tasks
+from .isolated import isolated
+from .pool import Limits, Task, run_tasks
 from .results import FIGURE_POLICIES, Figure, Section, Text
 
 QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
@@ -79,6 +80,7 @@ class Options:
     #: what every stage judges by (--tolerances, read once by the CLI): passed, as a value, in
     #: each Task's args, so a worker process never reads a file or an environment variable
     tolerances: Tolerances = field(default_factory=load_tolerances)
+    stage_timeout: float | None = None   # --stage-timeout (s); None: each stage's from its cost
 
     @property
     def figure_policy(self) -> str:
@@ -305,8 +307,7 @@ def _model_section_tasks(opts: Options, m) -> list[Task]:
 
 def _buildable(opts: Options):
     """The setups of the selected engines and the engines that cannot be built (each tried on
-    the thesis model in this process): (setups, [(engine, reason)])."""
-    from engines import load_engine
+    the thesis model in a worker): (setups, [(engine, reason)])."""
     from reference_model import load_model
     from .runs import setups_for
     setups = setups_for(opts.engines, opts.options_for())
@@ -316,7 +317,7 @@ def _buildable(opts: Options):
         if s.engine in ENGINE_NAMES and not s.options:
             continue
         try:
-            load_engine(s.engine, model, **dict(s.options))
+            isolated(s).build(model)   # in a worker: its __init__ cannot end this process
         except Exception as exc:   # noqa: BLE001 - any failure drops the engine
             dropped.append((s.engine, f"{type(exc).__name__}: {' '.join(str(exc).split())}"))
     return setups, dropped
@@ -365,7 +366,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
              f"{len(names)} scenario(s) on {', '.join(labels)}"
              + (", engine sections, faults ..." if not opts.models else
                 f", the stability of {len(critical)} model(s) ..."))
-    done = run_tasks(tasks, opts.workers, progress)
+    done = run_tasks(tasks, opts.workers, progress, limits=Limits(opts.stage_timeout))
     timings = {"stages": {t.label: round(done[t.key].seconds, 3) for t in tasks}}
 
     def value(key, title):
@@ -383,7 +384,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                 if isinstance(key, tuple) and key[0] == "horizon" and r.error is None}
     rows, checks, corrections = scenarios.reference_rows(names, runs, cases)
     from reference_model import load_model
-    by_label = {s.label: s for s in setups}
+    by_label = {s.label: isolated(s) for s in setups}   # main-process calls in workers
     sections = [scenarios.compare_scenarios(opts.tolerances, names, by_label, runs, horizons,
                                               cases)]
     # the thesis's claims are about the thesis bicycle: judged on its scenarios only

@@ -20,6 +20,7 @@ from ..judgments.scenario_compare import (compare_constraints, compare_forward, 
                                           compare_mass_matrix, constraint_series,
                                           trajectory_error)
 from ..judgments.tolerances import Tolerances
+from .isolated import failures_as_rows
 from .results import Section, num, verdict_word
 
 CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative to Mped
@@ -134,7 +135,9 @@ def compare_scenarios(tolerances: Tolerances, names, setups: dict, runs: dict, h
                     built[(lab, sc.model)] = _build_if_it_models(setups[lab], model, comps)
                 if lab != "reference" and built[(lab, sc.model)] is not None:
                     engines[lab] = built[(lab, sc.model)]
-            comps += compare_mass_matrix(name, model, ref.q[::step], engines, tols)
+            comps += failures_as_rows(   # one engine's failure is its own row
+                lambda e: compare_mass_matrix(name, model, ref.q[::step], e, tols), engines,
+                "mass_matrix", name, model.name)
         if sc.kind == "inverse":
             for lab, r in here.items():
                 if lab != "reference" and r.status == "completed":
