@@ -26,7 +26,7 @@ from engines.guard import EngineCallError, describe
 from .pool import StageTimeout, call_in_worker
 from .runs import EngineSetup
 
-__all__ = ["CALL_TIMEOUT", "IsolatedSetup", "RemoteEngine", "failures_as_rows", "isolated"]
+__all__ = ["CALL_TIMEOUT", "EngineGone", "IsolatedSetup", "RemoteEngine", "failures_as_rows", "isolated"]
 
 #: seconds one term call of the main process may take (a build and a batch of ~100 states:
 #: well under a second for every engine here; the limit only stops one that never returns)
@@ -47,14 +47,18 @@ def _call(setup: EngineSetup, model, name: str, args: tuple, kwargs: dict):
     return getattr(_plain(setup).build(model), name)(*args, **kwargs)
 
 
+class EngineGone(EngineCallError):
+    """An engine's call in a worker ran past its limit or ended the worker."""
+
+
 def _in_worker(who: str, what: str, timeout: float, func, *args):
     try:
         return call_in_worker(func, *args, timeout=timeout)
     except StageTimeout as exc:
-        raise EngineCallError(f"engine {who!r}: {what} {exc}") from None
+        raise EngineGone(f"engine {who!r}: {what} {exc}") from None
     except RuntimeError as exc:
-        if "worker process died" in str(exc):
-            raise EngineCallError(f"engine {who!r}: {what}: {exc}") from None
+        if type(exc) is RuntimeError and "worker process died" in str(exc):
+            raise EngineGone(f"engine {who!r}: {what}: {exc}") from None
         raise
 
 
@@ -66,12 +70,19 @@ class RemoteEngine(Engine):
         self.setup, self.timeout = setup, timeout
         self.name, caps, self.contacts, self.run_difference = info
         self.capabilities = frozenset(caps)
+        self.broken: str | None = None   # why the calls stopped: an earlier one hung or died
 
     def _remote(self, name: str, *args, **kwargs):
         if name not in self.capabilities:
             self._missing(name)
-        return _in_worker(self.name, name, self.timeout, _call, self.setup, self.model, name,
-                          args, kwargs)
+        if self.broken is not None:   # it hung or died once: not asked again
+            raise EngineCallError(f"engine {self.name!r}: {name} skipped ({self.broken})")
+        try:
+            return _in_worker(self.name, name, self.timeout, _call, self.setup, self.model,
+                              name, args, kwargs)
+        except EngineGone as exc:
+            self.broken = f"an earlier call failed: {exc}"
+            raise
 
     def mass_matrix(self, q):
         return self._remote("mass_matrix", q)

@@ -384,7 +384,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                 if isinstance(key, tuple) and key[0] == "horizon" and r.error is None}
     rows, checks, corrections = scenarios.reference_rows(names, runs, cases)
     from reference_model import load_model
-    by_label = {s.label: isolated(s) for s in setups}   # main-process calls in workers
+    by_label = {s.label: isolated(s, opts.stage_timeout) for s in setups}   # main-process calls in workers
     sections = [scenarios.compare_scenarios(opts.tolerances, names, by_label, runs, horizons,
                                               cases)]
     # the thesis's claims are about the thesis bicycle: judged on its scenarios only
