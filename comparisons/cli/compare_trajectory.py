@@ -40,6 +40,34 @@ def add_compare_trajectory_parser(sub) -> None:
     s.set_defaults(func=cmd_compare_trajectory)
 
 
+def _unique_columns(path: Path) -> None:
+    """A column named twice is refused (pandas would read the first and rename the second)."""
+    import csv
+    with open(path, newline="", encoding="utf-8-sig", errors="replace") as f:
+        header = next(csv.reader(f), [])
+    names = [h.strip() for h in header]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise UsageError(f"--csv {path}: column(s) {', '.join(twice)} appear more than once in "
+                         "the header; keep one of each")
+
+
+def _numbers(frame, need: list[str], path: Path) -> np.ndarray:
+    """The columns ``need`` as floats, or a `UsageError` naming the first cell that is not a
+    number (its column, its row in the file, its text)."""
+    import pandas as pd
+    for c in need:
+        values = pd.to_numeric(frame[c], errors="coerce")
+        bad = np.flatnonzero(values.isna().to_numpy() & frame[c].notna().to_numpy())
+        if bad.size:
+            k = int(bad[0])
+            raise UsageError(f"--csv {path}: column {c}, row {k + 2}: {str(frame[c].iloc[k])!r} "
+                             "is not a number (write numbers with a decimal point, no "
+                             "thousands separators)")
+        frame[c] = values
+    return frame[need].to_numpy(dtype=float)
+
+
 def read_run(path: Path, scenario, label: str) -> Run:
     """The CSV as a `Run`, or a `UsageError` naming the problem and the fix (one line)."""
     import pandas as pd
@@ -49,17 +77,14 @@ def read_run(path: Path, scenario, label: str) -> Run:
         frame = pd.read_csv(path)
     except (ValueError, UnicodeDecodeError, pd.errors.ParserError) as exc:
         raise UsageError(f"--csv {path}: not a readable CSV ({' '.join(str(exc).split())})") from None
+    _unique_columns(path)
     need = list(STATE_COLUMNS) + (list(TORQUE_NAMES) if scenario.kind == "inverse" else [])
     missing = [c for c in need if c not in frame.columns]
     if missing:
         raise UsageError(f"--csv {path}: missing column(s) {', '.join(missing[:6])}"
                          f"{' ...' if len(missing) > 6 else ''}; the columns are t, the eight "
                          "coordinates, d_<coordinate> (and Mdir, Mped, Mvue for an inverse scenario)")
-    data = frame[need].to_numpy(dtype=float) if all(
-        np.issubdtype(frame[c].dtype, np.number) for c in need) else None
-    if data is None:
-        bad = next(c for c in need if not np.issubdtype(frame[c].dtype, np.number))
-        raise UsageError(f"--csv {path}: column {bad} is not numeric")
+    data = _numbers(frame, need, path)
     if len(data) < 2:
         raise UsageError(f"--csv {path}: {len(data)} row(s); a run needs at least two samples")
     nan_rows, nan_cols = np.nonzero(~np.isfinite(data))
