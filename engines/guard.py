@@ -205,6 +205,15 @@ class _Guarded:
     def __reduce__(self):
         return (_Guarded, (self.engine, self.name))
 
+    @property
+    def __wrapped__(self):
+        """The engine's own method (`inspect.signature` reads its parameters through this)."""
+        return getattr(type(self.engine), self.name).__get__(self.engine)
+
+    @property
+    def __doc__(self):
+        return getattr(type(self.engine), self.name).__doc__
+
     def __call__(self, *args, **kwargs):
         engine, name = self.engine, self.name
         what = f"{_who(engine)}: {name}"

@@ -7,7 +7,9 @@ shape, ``None``, a string, complex values, a NaN, an exception with a 10^6-chara
 then, like a segfault), or a sleep past any stage's time limit. Every other call is the
 reference's, so the breakage is the only difference a run can see.
 ``SimulateDiverges`` raises "solver diverged" on every scenario, ``SimulateFailsEarly``
-returns status 'failed' after 3 samples: runs that were asked for and not made.
+returns status 'failed' after 3 samples: runs that were asked for and not made; the
+``...Trajectory`` / ``...InSimulate`` classes break ``simulate`` by default, ``ExitsInInit``
+its constructor.
 
 Self-contained (numpy and the project's packages only) so that each class loads from the
 command line: ``bicycle-xval run --quick --engines pinocchio,tests/hostile/engines.py:Nan``.
@@ -24,8 +26,11 @@ import numpy as np
 
 from engines.reference import ReferenceEngine
 
-__all__ = ["HOSTILE", "Complex", "Dies", "Exits", "Interrupts", "LongMessage", "Nan", "ReturnsNone",
-           "ReturnsString", "SimulateDiverges", "SimulateFailsEarly", "Sleeps", "WrongShape"]
+__all__ = ["HOSTILE", "IN_ONE_RUN", "Complex", "ComplexTrajectory", "DeclaresLimit", "Dies",
+           "DiesInSimulate",
+           "Exits", "ExitsInInit", "Interrupts", "LongMessage", "Nan", "NanTrajectory",
+           "ReturnsNone", "ReturnsString", "SimulateDiverges", "SimulateFailsEarly", "Sleeps",
+           "WrongShape", "WrongShapeTrajectory"]
 
 #: how long `Sleeps` sleeps (s): past the short --stage-timeout the tests give, far below the
 #: time a test may take if the limit did not work (the test's own timeout then fails it)
@@ -36,9 +41,11 @@ class _Broken(ReferenceEngine):
     """The reference with ``call`` replaced by `wrong`."""
 
     name = "hostile"
+    CALL = "mass_matrix"     # the call broken unless the option says another
 
-    def __init__(self, model, call: str = "mass_matrix"):
+    def __init__(self, model, call: str = ""):
         super().__init__(model)
+        call = call or self.CALL
         if call not in self.capabilities:
             raise ValueError(f"call {call!r} is not a capability")
         self.call = call
@@ -185,5 +192,43 @@ class SimulateFailsEarly(ReferenceEngine):
                                    t_end=float(traj.t[2]), diagnostics={})
 
 
+class WrongShapeTrajectory(WrongShape):
+    name, CALL = "wrong-shape-trajectory", "simulate"
+
+
+class ComplexTrajectory(Complex):
+    name, CALL = "complex-trajectory", "simulate"
+
+
+class NanTrajectory(Nan):
+    name, CALL = "nan-trajectory", "simulate"
+
+
+class DiesInSimulate(Dies):
+    name, CALL = "dies-in-simulate", "simulate"
+
+
+class DeclaresLimit(ReferenceEngine):
+    """A control: simulate raises CapabilityError, a declared limitation (not a failure)."""
+
+    name = "declares-limit"
+
+    def simulate(self, scenario, **options):
+        from engines.base import CapabilityError
+        raise CapabilityError("declares-limit cannot run forward scenarios on this model")
+
+
+class ExitsInInit(ReferenceEngine):
+    """sys.exit(4) while being built."""
+
+    name = "exits-in-init"
+
+    def __init__(self, model):
+        sys.exit(4)
+
+
 HOSTILE = (WrongShape, ReturnsNone, ReturnsString, Complex, Nan, LongMessage, Exits, Interrupts,
            Dies, Sleeps)
+#: what one `run` beside the reference and Pinocchio holds (tests/test_hostile_engines.py)
+IN_ONE_RUN = HOSTILE + (WrongShapeTrajectory, ComplexTrajectory, NanTrajectory, DiesInSimulate,
+                        SimulateDiverges, SimulateFailsEarly, ExitsInInit)
