@@ -250,3 +250,10 @@ def test_a_hanging_engine_costs_its_stage_limit(tmp_path):
     assert took < 60, took      # would be > 600 s (the sleep) without the limits
     assert [c for c in summary["comparisons"] if c["engines"] == ["reference"]
             and c["passed"]], "the reference's own comparisons are missing"
+
+
+def test_an_engine_that_exits_while_being_built_fails_to_load(thesis):
+    """sys.exit(4) in __init__ ended the harness with status 4; it is a load failure now."""
+    from engines import EngineLoadError
+    with pytest.raises(EngineLoadError, match="raised SystemExit while being built"):
+        load_engine(_spec_of(hostile.ExitsInInit), thesis)
