@@ -26,7 +26,8 @@ from engines.guard import EngineCallError, describe
 from .pool import StageTimeout, call_in_worker
 from .runs import EngineSetup
 
-__all__ = ["CALL_TIMEOUT", "EngineGone", "IsolatedSetup", "RemoteEngine", "failures_as_rows", "isolated"]
+__all__ = ["CALL_TIMEOUT", "EngineGone", "IsolatedSetup", "RemoteEngine", "failures_as_rows",
+           "isolated", "unjudgeable"]
 
 #: seconds one term call of the main process may take (a build and a batch of ~100 states:
 #: well under a second for every engine here; the limit only stops one that never returns)
@@ -53,7 +54,7 @@ class EngineGone(EngineCallError):
 
 def _in_worker(who: str, what: str, timeout: float, func, *args):
     try:
-        return call_in_worker(func, *args, timeout=timeout)
+        return call_in_worker(func, *args, time_limit=timeout)
     except StageTimeout as exc:
         raise EngineGone(f"engine {who!r}: {what} {exc}") from None
     except RuntimeError as exc:
@@ -143,3 +144,15 @@ def failures_as_rows(compare, engines: dict, quantity: str, scenario: str,
                         "passed": False, "localized_to": describe(exc),
                         "note": f"{label} failed while its {quantity} was compared"})
     return out
+
+
+def unjudgeable(ref, scenario, horizons: dict) -> str:
+    """Why no engine's run of ``scenario`` can be compared ('' when it can): the reference's
+    own run failed or timed out (nothing to compare against), or a forward scenario's
+    meaningful-horizon stage did (nothing says how far a comparison means anything)."""
+    if not ref.t.size:
+        return f"not compared: the reference's run failed ({ref.message})"
+    if scenario.kind == "forward" and scenario.name not in horizons and ref.scenario not in horizons:
+        return ("not compared: its meaningful-horizon stage failed (see that stage's line on "
+                "the progress output; rerun, or give a larger --stage-timeout)")
+    return ""

@@ -263,20 +263,20 @@ def run_tasks(tasks: list[Task], workers: int | None = None,
     return results
 
 
-def call_in_worker(func: Callable[..., Any], *args, timeout: float | None = None,
+def call_in_worker(func: Callable[..., Any], *args, time_limit: float | None = None,
                    **kwargs) -> Any:
     """``func(*args, **kwargs)`` in one worker process: its value, or its exception raised here
     (a `RuntimeError` with its text when it does not pickle, or when the worker died;
-    `StageTimeout` when it ran past ``timeout`` seconds, and its worker was killed)."""
+    `StageTimeout` when it ran past ``time_limit`` seconds, and its worker was killed)."""
     pool = _Workers([(partial(func, *args, **kwargs), ())])
     with terminating():
         try:
             pool.give(pool.fork(), 0)
-            got = pool.reply(timeout)
+            got = pool.reply(time_limit)
         finally:
             pool.close()
     if got is None:
-        raise StageTimeout(f"timed out after {timeout:.3g} s (its worker was killed)")
+        raise StageTimeout(f"timed out after {time_limit:.3g} s (its worker was killed)")
     reply, _ = got
     if reply.error is None:
         return reply.value

@@ -20,7 +20,7 @@ from ..judgments.scenario_compare import (compare_constraints, compare_forward, 
                                           compare_mass_matrix, constraint_series,
                                           trajectory_error)
 from ..judgments.tolerances import Tolerances
-from .isolated import failures_as_rows
+from .isolated import failures_as_rows, unjudgeable
 from .results import Section, num, verdict_word
 
 CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative to Mped
@@ -127,6 +127,13 @@ def compare_scenarios(tolerances: Tolerances, names, setups: dict, runs: dict, h
                               "engines": [lab], "max_error": None, "tolerance": None,
                               "passed": False, "localized_to": r.message[:300],
                               "note": f"{lab} did not complete the run it was asked for"})
+        missing = unjudgeable(ref, sc, horizons)   # the yardstick itself failed: say so
+        if missing:
+            comps.append({"quantity": "not compared", "scenario": name, "model": model.name,
+                          "engines": [lab for lab in here if lab != "reference"] or ["-"],
+                          "max_error": None, "tolerance": None, "passed": False,
+                          "localized_to": missing})
+            continue
         if "mass_matrix" in sc.compared and ref.t.size:
             step = max(1, len(ref.t) // M_STATES)
             engines = {}
