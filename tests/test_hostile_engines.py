@@ -174,8 +174,8 @@ def test_a_hung_or_dead_engine_in_the_main_process_is_its_failure():
     from comparisons.stages.runs import plugin_setup
     from reference_model import load_model
     model = load_model("thesis")
-    for cls, words in ((hostile.Sleeps, "timed out after 1.5 s"), (hostile.Dies, r"died \(exit status 7\)")):
-        eng = isolated(plugin_setup(_spec_of(cls)), timeout=1.5).build(model)
+    for cls, words in ((hostile.Sleeps, "timed out after 3 s"), (hostile.Dies, r"died \(exit status 7\)")):
+        eng = isolated(plugin_setup(_spec_of(cls)), timeout=3.0).build(model)
         with pytest.raises(EngineGone, match=words):
             eng.mass_matrix(Q)
         with pytest.raises(EngineCallError, match="gravity skipped .an earlier call failed"):
