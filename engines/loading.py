@@ -9,6 +9,9 @@ the failures with their reasons; `parse_engine_options` types ``key=value`` stri
 Errors: `EngineSpecError` (usage, exit 2): a bad name/spec, an option the engine does not take,
 a bad option value. `EngineLoadError` (exit 1): the engine does not import, lacks a declared
 capability's method, does not support the model's contact, or raised while being built.
+
+Every engine `load_engine` returns is guarded (`engines.guard`): what its methods return is
+checked at the boundary, and it cannot end the process.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from typing import Any, Mapping, NamedTuple, Sequence
 
 from .base import (CAPABILITIES, Engine, EngineError, EngineLoadError, EngineSpecError,
                    UnsupportedModel)
+from .guard import cut, engine_interrupt, guard, sigint_handler
 from .registry import EngineNotInstalled, _one_line, _resolve_target, _who, registrations, resolve
 
 
@@ -105,6 +109,7 @@ def load_engine(spec: str, model, **options) -> Engine:
         raise UnsupportedModel(f"{_who(label, spec)} supports the front-contact models "
                               f"{', '.join(contacts) or 'none'}, not {contact!r} of model "
                               f"{getattr(model, 'name', '?')!r}")
+    before = sigint_handler()
     try:
         engine = cls(model, **options)
     except EngineSpecError as exc:   # keep the class (EngineUsageError is one): callers match it
@@ -114,9 +119,15 @@ def load_engine(spec: str, model, **options) -> Engine:
                                f"{getattr(model, 'name', '?')!r}: {_one_line(exc)}") from exc
     except Exception as exc:  # noqa: BLE001 - report any failure of the engine's constructor
         raise EngineLoadError(f"{_who(label, spec)} raised while being built: "
-                              f"{type(exc).__name__}: {_one_line(exc)}") from exc
+                              f"{type(exc).__name__}: {cut(_one_line(exc))}") from exc
+    except (SystemExit, KeyboardInterrupt) as exc:   # its own exit, never the harness's
+        if not engine_interrupt(exc, before):
+            raise
+        raise EngineLoadError(f"{_who(label, spec)} raised {type(exc).__name__} while being "
+                              "built (an engine must not end the process: raise an exception)"
+                              ) from None
     _check_capabilities(engine, label, spec)
-    return engine
+    return guard(engine)
 
 
 def load_engines(specs: Sequence[str], model, options: Mapping[str, Mapping[str, Any]] | None = None

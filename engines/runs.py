@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .base import CapabilityError
+from .guard import describe
 
 
 @dataclass
@@ -77,7 +78,7 @@ def run_scenario(label: str, engine, model, scenario, kinds=("inverse", "forward
                    f"declared model difference: {' '.join(str(exc).split())}",
                    time.perf_counter() - t0)
     except Exception as exc:   # an engine failure is a result, reported with its message
-        return Run(label, scenario.name, model.name, scenario.kind, "failed",
-                   f"{type(exc).__name__}: {' '.join(str(exc).split())}", time.perf_counter() - t0)
+        return Run(label, scenario.name, model.name, scenario.kind, "failed", describe(exc),
+                   time.perf_counter() - t0)
     return Run(label, scenario.name, model.name, "forward", traj.status, traj.message,
                time.perf_counter() - t0, traj.t, traj.q, traj.dq, trajectory=traj)

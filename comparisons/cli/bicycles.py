@@ -41,6 +41,16 @@ def add_import_parser(subparsers) -> None:
     s.set_defaults(func=run_import)
 
 
+def _printable_name(name: str, what: str) -> None:
+    """A bicycle's name is one printable line: it is written into the parameter file, the
+    reports and the data files' names."""
+    import unicodedata
+    for k, ch in enumerate(name):
+        if unicodedata.category(ch)[0] == "C":
+            raise UsageError(f"{what} holds the control character U+{ord(ch):04X} at position "
+                             f"{k + 1}; a bicycle's name is one printable line, e.g. --name my-bike")
+
+
 def run_import(args) -> int:
     """The ``import`` command: writes ``--out`` and prints one line about it."""
     from reference_model.benchmark_files import read_benchmark_file, write_import
@@ -48,6 +58,8 @@ def run_import(args) -> int:
 
     if args.name is not None and not args.name.strip():
         raise UsageError("--name is empty; give the bicycle a name, e.g. --name my-bike")
+    _printable_name(args.name if args.name is not None else args.file.stem,
+                    "--name" if args.name is not None else f"the file name {args.file.name!r}")
     if args.out.exists() and args.file.exists() and args.out.resolve() == args.file.resolve():
         raise UsageError(f"--out {args.out} is the input file; write the parameter file "
                          "elsewhere, e.g. --out " + args.out.with_name(

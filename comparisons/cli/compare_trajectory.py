@@ -40,6 +40,34 @@ def add_compare_trajectory_parser(sub) -> None:
     s.set_defaults(func=cmd_compare_trajectory)
 
 
+def _unique_columns(path: Path) -> None:
+    """A column named twice is refused (pandas would read the first and rename the second)."""
+    import csv
+    with open(path, newline="", encoding="utf-8-sig", errors="replace") as f:
+        header = next(csv.reader(f), [])
+    names = [h.strip() for h in header]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise UsageError(f"--csv {path}: column(s) {', '.join(twice)} appear more than once in "
+                         "the header; keep one of each")
+
+
+def _numbers(frame, need: list[str], path: Path) -> np.ndarray:
+    """The columns ``need`` as floats, or a `UsageError` naming the first cell that is not a
+    number (its column, its row in the file, its text)."""
+    import pandas as pd
+    for c in need:
+        values = pd.to_numeric(frame[c], errors="coerce")
+        bad = np.flatnonzero(values.isna().to_numpy() & frame[c].notna().to_numpy())
+        if bad.size:
+            k = int(bad[0])
+            raise UsageError(f"--csv {path}: column {c}, row {k + 2}: {str(frame[c].iloc[k])!r} "
+                             "is not a number (write numbers with a decimal point, no "
+                             "thousands separators)")
+        frame[c] = values
+    return frame[need].to_numpy(dtype=float)
+
+
 def read_run(path: Path, scenario, label: str) -> Run:
     """The CSV as a `Run`, or a `UsageError` naming the problem and the fix (one line)."""
     import pandas as pd
@@ -49,17 +77,14 @@ def read_run(path: Path, scenario, label: str) -> Run:
         frame = pd.read_csv(path)
     except (ValueError, UnicodeDecodeError, pd.errors.ParserError) as exc:
         raise UsageError(f"--csv {path}: not a readable CSV ({' '.join(str(exc).split())})") from None
+    _unique_columns(path)
     need = list(STATE_COLUMNS) + (list(TORQUE_NAMES) if scenario.kind == "inverse" else [])
     missing = [c for c in need if c not in frame.columns]
     if missing:
         raise UsageError(f"--csv {path}: missing column(s) {', '.join(missing[:6])}"
                          f"{' ...' if len(missing) > 6 else ''}; the columns are t, the eight "
                          "coordinates, d_<coordinate> (and Mdir, Mped, Mvue for an inverse scenario)")
-    data = frame[need].to_numpy(dtype=float) if all(
-        np.issubdtype(frame[c].dtype, np.number) for c in need) else None
-    if data is None:
-        bad = next(c for c in need if not np.issubdtype(frame[c].dtype, np.number))
-        raise UsageError(f"--csv {path}: column {bad} is not numeric")
+    data = _numbers(frame, need, path)
     if len(data) < 2:
         raise UsageError(f"--csv {path}: {len(data)} row(s); a run needs at least two samples")
     nan_rows, nan_cols = np.nonzero(~np.isfinite(data))
@@ -83,17 +108,50 @@ def read_run(path: Path, scenario, label: str) -> Run:
     lam = None
     if scenario.kind == "inverse" and all(f"lambda_{k}" in frame.columns for k in range(1, 6)):
         lam = frame[[f"lambda_{k}" for k in range(1, 6)]].to_numpy(dtype=float)
-    ended = t[-1] < scenario.t[-1] - 1e-9
-    return Run(label, scenario.name, scenario.model, scenario.kind,
-               "fell" if ended else "completed",
-               f"read from {path.name} ({len(t)} samples to {t[-1]:g} s)", 0.0, t, q, dq, T, lam)
+    status, how = run_status(scenario, t, q)
+    return Run(label, scenario.name, scenario.model, scenario.kind, status,
+               f"read from {path.name} ({len(t)} samples to {t[-1]:g} s{how})", 0.0, t, q, dq,
+               T, lam)
+
+
+#: the status of a CSV that ends before its scenario without a fall: its run did not cover the
+#: span the verdicts judge, so what depends on that span is 'not assessed' (as the claims treat
+#: a run that failed), never a fall
+ENDED_EARLY = "failed"
+
+
+def run_status(scenario, t, q) -> tuple[str, str]:
+    """(status, what it means) of a run read from a file: 'completed' when it reaches the
+    scenario's end, 'fell' when it ends with |theta| at the fall limit (the solvers' default,
+    `reference_model.solvers.DEFAULT_FALL_LIMIT`, to 1e-3 relative), else `ENDED_EARLY`."""
+    from reference_model.solvers import DEFAULT_FALL_LIMIT
+    if t[-1] >= scenario.t[-1] - 1e-9:
+        return "completed", ""
+    lean = abs(float(q[-1, 3]))
+    if lean >= DEFAULT_FALL_LIMIT * (1 - 1e-3):
+        return "fell", f"; |theta| = {lean:.3g} rad at its end: a fall"
+    return ENDED_EARLY, (f"; it ends before the scenario's {scenario.t[-1]:g} s with |theta| = "
+                         f"{lean:.3g} rad, below the fall limit {DEFAULT_FALL_LIMIT:g} rad: not a "
+                         "fall, and what needs the rest of the run is not assessed")
+
+
+def _not_assessed_beyond(comps: list[dict], run: Run, horizon: float) -> None:
+    """A trajectory comparison of a run that ends early, before the meaningful horizon, and did
+    not fall: not assessed (it compared only the start)."""
+    if run.status != ENDED_EARLY or run.t_end >= horizon - 1e-9:
+        return
+    for c in comps:
+        if c["quantity"] == "trajectory":
+            c.update(passed=None, verdict="not assessed",
+                     why=f"the run ends at {run.t_end:g} s, before the meaningful horizon "
+                         f"{horizon:.2f} s, without a fall")
 
 
 def cmd_compare_trajectory(args) -> int:
     from reference_model import load_model
     from reference_model.scenarios import get_scenario
 
-    from ..judgments.claims import judge_claims
+    from ..judgments.claims import CLAIMS, judge_claims
     from ..judgments.convergence import reference_horizon
     from ..judgments.scenario_compare import compare_constraints, compare_forward, compare_inverse
     from ..stages.runs import run_one, setup_of
@@ -118,15 +176,18 @@ def cmd_compare_trajectory(args) -> int:
     else:
         hor = reference_horizon(model, sc)
         comps += compare_forward(model, ref, theirs, hor, tols, judged_by="trajectory_conformance")[0]
+        _not_assessed_beyond(comps, theirs, hor.t)
         comps.append(compare_constraints(model, theirs, tols))
     runs = {("reference", sc.name): ref, (label, sc.name): theirs}
     if sc.name == "replay":
         runs[("reference", "zigzag")] = run_one(setup_of("reference"), "zigzag")
+    own = {c.id for c in CLAIMS if set(c.scenarios) <= {sc.name, "zigzag"}}
     claims = [c for c in judge_claims(runs, [label], load_model("thesis"), [sc.name])
-              if c["verdict"] != "not assessed"]   # claims needing other scenarios too
+              if c["verdict"] != "not assessed" or c["claim_id"] in own]   # not: needing others
     print(f"{label} on {sc.name} ({theirs.message}) against the reference ({model.name}):")
     for c in comps:
-        verdict = "reported" if c["passed"] is None else ("pass" if c["passed"] else "FAIL")
+        verdict = c.get("verdict") or ("reported" if c["passed"] is None else
+                                       ("pass" if c["passed"] else "FAIL"))
         tol = "-" if c.get("tolerance") is None else f"{c['tolerance']:.0e}"
         err = "-" if c.get("max_error") is None else f"{c['max_error']:.2e}"
         print(f"  {c['quantity']:20s} {err:>9s} (tolerance {tol}) {verdict:8s} "

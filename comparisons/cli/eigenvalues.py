@@ -52,6 +52,10 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
         raise UsageError(f"{option} {raw!r}: stop {stop:g} is below start {start:g}; write "
                      f"start:stop:step with start <= stop, {_EXAMPLE}")
     span = (stop - start) / step
+    if stop > start and span < 1 - 1e-9:   # one speed of a range asked for: not what was meant
+        raise UsageError(f"{option} {raw!r}: step {step:g} is larger than the range {start:g} to "
+                         f"{stop:g} m/s, which would give the one speed {start:g}; the third "
+                         f"number is the step in m/s, not a count, {_EXAMPLE}")
     n = math.floor(span + 1e-9)
     if n + 1 > MAX_SPEEDS:
         raise UsageError(f"{option} {raw!r}: {n + 1} speeds is more than {MAX_SPEEDS}; use a larger "

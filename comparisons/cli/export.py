@@ -74,6 +74,10 @@ def run_export(args) -> int:
     from reference_model import load_model
 
     fmt = EXPORT_FORMATS[args.format]
+    if not args.out.name or args.out.name in (".", ".."):   # '' and '.' are Path('.')
+        raise UsageError(f"--out {str(args.out)!r} names no file; give a file name, e.g. "
+                         f"--out {args.model if '/' not in args.model else 'bicycle'}"
+                         f"{fmt.suffixes[0]}")
     if args.out.suffix.lower() not in fmt.suffixes:
         raise UsageError(f"--out {args.out}: --format {fmt.name} writes "
                          f"{', '.join(fmt.suffixes)} files; name it e.g. "

@@ -137,6 +137,9 @@ def cmd_run(args) -> int:
     from ..stages.pool import MAX_WORKERS
     if args.jobs is not None and not 1 <= args.jobs <= MAX_WORKERS:
         raise UsageError(f"--jobs must be between 1 and {MAX_WORKERS}; got {args.jobs}")
+    if args.stage_timeout is not None and not 0 < args.stage_timeout < float("inf"):
+        raise UsageError(f"--stage-timeout must be a positive number of seconds; got "
+                         f"{args.stage_timeout:g}")
     from .tolerance_option import tolerances_from
     tolerances = tolerances_from(args)     # read once, checked before the runs
     from ..stages.ownership import OutFolderError, check_out_folder
@@ -158,6 +161,7 @@ def cmd_run(args) -> int:
                          f"{', '.join(SECTIONS)} (comma-separated), or none for the scenarios only")
     opts = dataclasses.replace(opts, workers=args.jobs, sections=sections,
                                figures=args.figures or "", tolerances=tolerances,
+                               stage_timeout=args.stage_timeout,
                                engine_options=_run_engine_options(opts.engines, args.engine_options))
     from .bicycles import with_models
     opts = with_models(opts, args.model, args.scenario_file)
@@ -291,6 +295,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "failed, or none [failing with --quick, else all]")
     s.add_argument("--jobs", type=int, default=None,
                    help="worker processes [the machine's cores, never more than the stages]")
+    s.add_argument("--stage-timeout", type=float, default=None, metavar="SECONDS",
+                   help="time limit of every stage; a stage past it is cancelled and reported "
+                        "as timed out [each stage's expected time x 20, at least 60 s]")
     from .tolerance_option import add_tolerances_argument
     add_tolerances_argument(s)
     from .bicycles import add_run_model_options

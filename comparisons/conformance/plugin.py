@@ -87,7 +87,15 @@ def read_xfails(path: Path) -> dict[str, str]:
     """``{check id: reason}`` from an expected-failures file; a line without a reason is an
     error (an expected failure is a claim, and a claim states its reason)."""
     out = {}
-    for k, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise pytest.UsageError(f"--xfails-file {path}: not UTF-8 text (byte {exc.start}); save "
+                                "it as UTF-8") from None
+    except OSError as exc:
+        raise pytest.UsageError(f"--xfails-file {path}: cannot be read ({exc.strerror or exc})"
+                                ) from None
+    for k, line in enumerate(text.splitlines(), 1):
         text = line.strip()
         if not text or text.startswith("#"):
             continue
@@ -195,9 +203,25 @@ def declared_xfails(engine) -> dict[str, str]:
     ``{check id pattern: reason}`` or the path of a file in the ``--xfails-file`` format.
     In a pattern ``*`` matches anything (nothing else is special) and ``{engine}`` stands for the engine's label in the ids,
     e.g. ``test_trajectory_to_the_meaningful_horizon[{engine}-*-stability-psid5]``."""
-    declared = getattr(engine, "conformance_xfails", None) or {}
+    from collections.abc import Mapping
+    declared = getattr(engine, "conformance_xfails", None)
+    who = f"engine {getattr(engine, 'name', '?')!r}: its conformance_xfails"
+    if declared is None:
+        return {}
     if isinstance(declared, (str, Path)):
-        declared = read_xfails(Path(declared))
+        if not Path(declared).is_file():
+            raise pytest.UsageError(f"{who} names no file: {str(declared)!r} (give the path of "
+                                    "an expected-failures file, e.g. Path(__file__).parent / "
+                                    "'conformance_xfails.txt')")
+        try:
+            return read_xfails(Path(declared))
+        except pytest.UsageError as exc:
+            raise pytest.UsageError(f"{who}: {str(exc).removeprefix('--xfails-file ')}") from None
+    if not isinstance(declared, Mapping) or not all(
+            isinstance(k, str) and isinstance(v, str) for k, v in declared.items()):
+        raise pytest.UsageError(f"{who} is {type(declared).__name__} {str(declared)[:60]!r}; it "
+                                "must be a mapping {check id pattern: reason} (both text) or "
+                                "the path of an expected-failures file")
     return dict(declared)
 
 
@@ -239,3 +263,25 @@ def pytest_collection_modifyitems(config, items):
         warnings.warn(pytest.PytestConfigWarning(
             f"--xfails-file lists {len(unknown)} check id(s) that match no collected check, "
             f"e.g. {unknown[0]!r}"))
+
+
+#: an exception text longer than this (characters) is reported as its one cut line instead
+#: of whole (an engine that raises with a 10^6-character message would otherwise print it)
+LONG_MESSAGE = 2000
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    rep = outcome.get_result()
+    exc = call.excinfo.value if call.excinfo is not None else None
+    if rep.failed and exc is not None:
+        try:
+            long = len(str(exc)) > LONG_MESSAGE
+        except Exception:   # noqa: BLE001 - a message that cannot be rendered: shorten too
+            long = True
+        if long:
+            from engines.guard import describe
+            where = call.excinfo.traceback[-1]
+            rep.longrepr = (f"{where.path}:{where.lineno + 1}: {describe(exc)} (the message "
+                            f"was cut to one line)")

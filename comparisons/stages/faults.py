@@ -109,6 +109,7 @@ def localization_lines(tolerances: Tolerances, comparisons, setups: dict,
     everything agrees. ``specs``: a model's name -> its spec (a user's file) where the name
     alone does not load it."""
     from engines import UnsupportedModel
+    from engines.guard import describe
     from reference_model import load_model
     from ..judgments.diagnose import localize
     from ..judgments.terms import random_states
@@ -124,6 +125,10 @@ def localization_lines(tolerances: Tolerances, comparisons, setups: dict,
             built = setups[engine].build(model)
         except (UnsupportedModel, ValueError, OSError):   # nothing to localize against
             continue
-        loc = localize(model, random_states(16, seed=11), [built], tolerances=tolerances)
+        try:
+            loc = localize(model, random_states(16, seed=11), [built], tolerances=tolerances)
+        except Exception as exc:   # noqa: BLE001 - the engine failed: say so, keep the rest
+            out.append((f"{model_name}: reference vs {engine}", f"not localized: {describe(exc)}"))
+            continue
         out.append((f"{model_name}: reference vs {engine}", loc.describe()))
     return out

@@ -44,7 +44,8 @@ from ..judgments.rows import Comparison
 from ..judgments.tolerances import Tolerances, load_tolerances
 from ..judgments.summary import summary_table
 from .catalog import SECTIONS as _SECTIONS, STAGES
-from .pool import Task, run_tasks
+from .isolated import isolated
+from .pool import Limits, Task, run_tasks
 from .results import FIGURE_POLICIES, Figure, Section, Text
 from .stage import Plan, failed_section
 
@@ -74,6 +75,7 @@ class Options:
     #: what every stage judges by (--tolerances, read once by the CLI): passed, as a value, in
     #: each Task's args, so a worker process never reads a file or an environment variable
     tolerances: Tolerances = field(default_factory=load_tolerances)
+    stage_timeout: float | None = None   # --stage-timeout (s); None: each stage's from its cost
 
     @property
     def figure_policy(self) -> str:
@@ -222,8 +224,7 @@ def _stage_tasks(plan: Plan) -> list[Task]:
 
 def _buildable(opts: Options):
     """The setups of the selected engines and the engines that cannot be built (each tried on
-    the thesis model in this process): (setups, [(engine, reason)])."""
-    from engines import load_engine
+    the thesis model in a worker): (setups, [(engine, reason)])."""
     from reference_model import load_model
     from .runs import setups_for
     setups = setups_for(opts.engines, opts.options_for())
@@ -233,7 +234,7 @@ def _buildable(opts: Options):
         if ":" not in s.engine and not opts.options_for().get(s.engine):
             continue   # a registered engine at its declared setups: its stages say what fails
         try:
-            load_engine(s.engine, model, **dict(s.options))
+            isolated(s).build(model)   # in a worker: its __init__ cannot end this process
         except Exception as exc:   # noqa: BLE001 - any failure drops the engine
             dropped.append((s.engine, f"{type(exc).__name__}: {' '.join(str(exc).split())}"))
     return setups, dropped
@@ -276,7 +277,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
              f"{len(names)} scenario(s) on {', '.join(labels)}"
              + (", engine sections, faults ..." if not opts.models else
                 f", the stability of {len(critical)} model(s) ..."))
-    done = run_tasks(tasks, opts.workers, progress)
+    done = run_tasks(tasks, opts.workers, progress, limits=Limits(opts.stage_timeout))
     timings = {"stages": {t.label: round(done[t.key].seconds, 3) for t in tasks}}
 
     runs = {}
@@ -290,7 +291,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                 if ("horizon", c.name) in done and done[("horizon", c.name)].error is None}
     rows, checks, corrections = scenarios.reference_rows(names, runs, cases)
     from reference_model import load_model
-    by_label = {s.label: s for s in setups}
+    by_label = {s.label: isolated(s, opts.stage_timeout) for s in setups}   # main-process calls in workers
     sections = [scenarios.compare_scenarios(opts.tolerances, names, by_label, runs, horizons,
                                               cases)]
     # the thesis's claims are about the thesis bicycle: judged on its scenarios only

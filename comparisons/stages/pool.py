@@ -25,11 +25,14 @@ from functools import partial
 from multiprocessing.connection import Connection, Pipe, wait
 from typing import Any, Callable, Hashable
 
+from engines.guard import describe
+
 from .signals import (Terminated, blocked, child_init, flush_streams, raise_terminated,
                       terminating)
 
-__all__ = ["MAX_WORKERS", "WARM_IMPORTS", "Task", "TaskResult", "Terminated", "call_in_worker",
-           "default_workers", "raise_terminated", "run_tasks", "warm_imports"]
+__all__ = ["MAX_WORKERS", "WARM_IMPORTS", "Limits", "StageTimeout", "Task", "TaskResult",
+           "Terminated", "call_in_worker", "default_workers", "raise_terminated", "run_tasks",
+           "warm_imports"]
 
 MAX_WORKERS = 8
 #: imported once in the main process before the stages' workers fork, so each worker does not
@@ -57,6 +60,32 @@ class Task:
     args: tuple = ()
     cost: float = 1.0
     label: str = ""
+
+
+@dataclass(frozen=True)
+class Limits:
+    """How long a task may run: ``override`` (s, ``run --stage-timeout``) for every task, else
+    its declared cost (the scheduling estimate, s on the 2-core machine) times ``factor``, at
+    least ``floor``. The factor and floor leave room for a machine several times slower or
+    loaded (a cost is a typical time, not a bound); a task past ``slow`` times its cost (at
+    least ``slow_floor``) is named on the progress line once, while it runs."""
+
+    override: float | None = None
+    floor: float = 60.0
+    factor: float = 20.0
+    slow: float = 4.0
+    slow_floor: float = 10.0
+
+    def budget(self, task: "Task") -> float:
+        return self.override if self.override is not None else max(self.floor,
+                                                                    self.factor * task.cost)
+
+    def expected(self, task: "Task") -> float:
+        return min(self.budget(task), max(self.slow_floor, self.slow * task.cost))
+
+
+class StageTimeout(RuntimeError):
+    """A call ran past its time limit; its worker was killed."""
 
 
 @dataclass
@@ -90,18 +119,18 @@ def _serve(conn: Connection, calls: list[tuple[Callable, tuple]]) -> None:
         t0 = time.perf_counter()
         try:
             reply = _Reply(k, func(*args), time.perf_counter() - t0)
-        except Exception as exc:   # a broken call is reported, the others go on
+        except BaseException as exc:   # noqa: BLE001 - a broken call is reported, the others go
+            # on (SIGINT is ignored here and SIGTERM kills: any interruption is the call's own)
             try:
                 raised = pickle.dumps(exc)
             except Exception:      # noqa: BLE001 - the text is enough
                 raised = None
-            reply = _Reply(k, error=f"{type(exc).__name__}: {exc}", exception=raised)
+            reply = _Reply(k, error=describe(exc), exception=raised)
         flush_streams()     # what the call printed: the worker ends by SIGKILL, unflushed
         try:
             conn.send(reply)
         except Exception as exc:   # noqa: BLE001 - the value does not pickle
-            conn.send(_Reply(k, error=f"its result could not be sent back "
-                                      f"({type(exc).__name__}: {exc})"))
+            conn.send(_Reply(k, error=f"its result could not be sent back ({describe(exc)})"))
 
 
 @dataclass
@@ -111,6 +140,7 @@ class _Workers:
     calls: list[tuple[Callable, tuple]]
     busy: dict[Connection, int] = field(default_factory=dict)     # pipe -> call index
     pids: dict[Connection, int] = field(default_factory=dict)     # pipe -> worker pid
+    started: dict[Connection, float] = field(default_factory=dict)   # pipe -> when given
 
     def fork(self) -> Connection:
         parent = os.getpid()
@@ -135,10 +165,15 @@ class _Workers:
     def give(self, conn: Connection, k: int) -> None:
         conn.send(k)
         self.busy[conn] = k
+        self.started[conn] = time.monotonic()
 
-    def reply(self) -> tuple[_Reply, Connection | None]:
-        """The next reply, and the pipe of the worker that is now free (None: it died)."""
-        conn = wait(list(self.busy))[0]
+    def reply(self, timeout: float | None = None) -> tuple[_Reply, Connection | None] | None:
+        """The next reply, and the pipe of the worker that is now free (None: it died); None
+        when no reply came within ``timeout`` seconds."""
+        ready = wait(list(self.busy), timeout)
+        if not ready:
+            return None
+        conn = ready[0]
         k = self.busy.pop(conn)
         try:
             return conn.recv(), conn
@@ -146,9 +181,16 @@ class _Workers:
             status = self._end(conn)
             return _Reply(k, error=f"its worker process died ({_how(status)})"), None
 
+    def kill(self, conn: Connection) -> int:
+        """End the worker of ``conn`` (a call past its limit): its call index."""
+        k = self.busy[conn]
+        self._end(conn)
+        return k
+
     def _end(self, conn: Connection) -> int:
         pid = self.pids.pop(conn)
         self.busy.pop(conn, None)
+        self.started.pop(conn, None)
         with blocked():
             try:
                 os.kill(pid, signal.SIGKILL)
@@ -177,10 +219,14 @@ def default_workers(n_tasks: int) -> int:
 
 def run_tasks(tasks: list[Task], workers: int | None = None,
               progress: Callable[[str], None] = lambda s: None,
-              warm: tuple[str, ...] = WARM_IMPORTS) -> dict[Hashable, TaskResult]:
+              warm: tuple[str, ...] = WARM_IMPORTS,
+              limits: Limits | None = None) -> dict[Hashable, TaskResult]:
     """Run every task in worker processes; a task that raises (or whose worker dies) becomes a
-    `TaskResult` with ``error`` set (the exception's type and message), never an aborted run.
-    ``warm``: modules imported in this process before the workers fork (they inherit them)."""
+    `TaskResult` with ``error`` set (the exception's type and message, one line), never an
+    aborted run. ``warm``: modules imported in this process before the workers fork (they
+    inherit them). ``limits``: each task's time limit (`Limits`; None: none); a task past it
+    is 'timed out after N s', its worker killed and replaced, and one running longer than
+    expected is named on the progress line."""
     if not tasks:
         return {}
     order = sorted(tasks, key=lambda t: -t.cost)
@@ -188,13 +234,25 @@ def run_tasks(tasks: list[Task], workers: int | None = None,
     results: dict[Hashable, TaskResult] = {}
     warm_imports(warm)
     queue = deque(range(len(order)))
+    told: set[int] = set()     # tasks already named as slow
     pool = _Workers([(t.func, t.args) for t in order])
     with terminating():
         try:
             for _ in range(workers):
                 pool.give(pool.fork(), queue.popleft())
             while pool.busy:
-                reply, free = pool.reply()
+                got = pool.reply(_wait(pool, order, limits, told, progress))
+                if got is None:
+                    for conn, k in _overdue(pool, order, limits):
+                        task = order[k]
+                        pool.kill(conn)
+                        results[task.key] = TaskResult(task.key, None, limits.budget(task),
+                                                       _timed_out(limits, task))
+                        progress(_line(len(results), len(order), task, results[task.key]))
+                        if queue:
+                            pool.give(pool.fork(), queue.popleft())
+                    continue
+                reply, free = got
                 task = order[reply.index]
                 results[task.key] = TaskResult(task.key, reply.value, reply.seconds, reply.error)
                 progress(_line(len(results), len(order), task, results[task.key]))
@@ -205,16 +263,21 @@ def run_tasks(tasks: list[Task], workers: int | None = None,
     return results
 
 
-def call_in_worker(func: Callable[..., Any], *args, **kwargs) -> Any:
+def call_in_worker(func: Callable[..., Any], *args, time_limit: float | None = None,
+                   **kwargs) -> Any:
     """``func(*args, **kwargs)`` in one worker process: its value, or its exception raised here
-    (a `RuntimeError` with its text when it does not pickle, or when the worker died)."""
+    (a `RuntimeError` with its text when it does not pickle, or when the worker died;
+    `StageTimeout` when it ran past ``time_limit`` seconds, and its worker was killed)."""
     pool = _Workers([(partial(func, *args, **kwargs), ())])
     with terminating():
         try:
             pool.give(pool.fork(), 0)
-            reply, _ = pool.reply()
+            got = pool.reply(time_limit)
         finally:
             pool.close()
+    if got is None:
+        raise StageTimeout(f"timed out after {time_limit:.3g} s (its worker was killed)")
+    reply, _ = got
     if reply.error is None:
         return reply.value
     raise _exception(reply)
@@ -225,6 +288,45 @@ def _exception(reply: _Reply) -> BaseException:
         return pickle.loads(reply.exception) if reply.exception else RuntimeError(reply.error)
     except Exception:   # noqa: BLE001 - an exception that does not unpickle: its text
         return RuntimeError(reply.error)
+
+
+def _wait(pool: _Workers, order: list[Task], limits: Limits | None, told: set,
+          progress: Callable[[str], None]) -> float | None:
+    """Seconds until the next limit or slow-stage notice of a running task (None: no limits);
+    names, once, each running task already past its expected time."""
+    if limits is None:
+        return None
+    now, soonest = time.monotonic(), float("inf")
+    for conn, k in pool.busy.items():
+        task, ran = order[k], now - pool.started[conn]
+        expected = limits.expected(task)
+        if ran >= expected and k not in told and expected < limits.budget(task):
+            told.add(k)
+            progress(f"  ... {task.label or task.key}: still running after {ran:.0f} s "
+                     f"(expected about {task.cost:g} s; its limit is "
+                     f"{limits.budget(task):.0f} s)")
+        for at in (expected, limits.budget(task)):
+            if at > ran:
+                soonest = min(soonest, at - ran)
+        if ran >= limits.budget(task):
+            soonest = 0.0
+    return max(0.0, soonest) if soonest != float("inf") else 0.0
+
+
+def _overdue(pool: _Workers, order: list[Task], limits: Limits | None) -> list[tuple]:
+    if limits is None:
+        return []
+    now = time.monotonic()
+    return [(conn, k) for conn, k in list(pool.busy.items())
+            if now - pool.started[conn] >= limits.budget(order[k])]
+
+
+def _timed_out(limits: Limits, task: Task) -> str:
+    why = ("--stage-timeout" if limits.override is not None else
+           f"{limits.factor:g} x its expected {task.cost:g} s, at least {limits.floor:g} s; "
+           "--stage-timeout sets it")
+    return (f"timed out after {limits.budget(task):.3g} s (limit: {why}); its worker was "
+            "killed")
 
 
 def _line(k: int, n: int, task: Task, r: TaskResult) -> str:

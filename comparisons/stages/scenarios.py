@@ -22,6 +22,7 @@ from ..judgments.scenario_compare import (compare_constraints, compare_forward, 
                                           trajectory_error)
 from ..judgments.tolerances import Tolerances
 from ..judgments.rows import Comparison
+from .isolated import failures_as_rows, unjudgeable
 from .results import Section, num, verdict_word
 
 CHECK_RELATIVE = 1e-12   # check torques: round-off of the 13x13 solve, relative to Mped
@@ -127,6 +128,13 @@ def compare_scenarios(tolerances: Tolerances, names, setups: dict, runs: dict, h
                               "engines": [lab], "max_error": None, "tolerance": None,
                               "passed": False, "localized_to": r.message[:300],
                               "note": f"{lab} did not complete the run it was asked for"}))
+        missing = unjudgeable(ref, sc, horizons)   # the yardstick itself failed: say so
+        if missing:
+            comps.append(Comparison.of({"quantity": "not compared", "scenario": name, "model": model.name,
+                          "engines": [lab for lab in here if lab != "reference"] or ["-"],
+                          "max_error": None, "tolerance": None, "passed": False,
+                          "localized_to": missing}))
+            continue
         if "mass_matrix" in sc.compared and ref.t.size:
             step = max(1, len(ref.t) // M_STATES)
             engines = {}
@@ -135,7 +143,9 @@ def compare_scenarios(tolerances: Tolerances, names, setups: dict, runs: dict, h
                     built[(lab, sc.model)] = _build_if_it_models(setups[lab], model, comps)
                 if lab != "reference" and built[(lab, sc.model)] is not None:
                     engines[lab] = built[(lab, sc.model)]
-            comps += compare_mass_matrix(name, model, ref.q[::step], engines, tols)
+            comps += failures_as_rows(   # one engine's failure is its own row
+                lambda e: compare_mass_matrix(name, model, ref.q[::step], e, tols), engines,
+                "mass_matrix", name, model.name)
         if sc.kind == "inverse":
             for lab, r in here.items():
                 if lab != "reference" and r.status == "completed":

@@ -8,9 +8,9 @@ one of :data:`FORMATS` to a file, atomically.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
+from ..parameters.benchmark_files import _write_atomically
 from ..parameters.loading import resolve_model
 from ..parameters.values import Parameters
 from .description import json_text
@@ -34,14 +34,5 @@ def export_model(model: str | os.PathLike[str] | Parameters, fmt: str, out: str 
     p = resolve_model(model)
     text = {"urdf": urdf_text, "mjcf": mjcf_text, "json": json_text}[fmt](p)
     out = Path(out)
-    fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", prefix=f".{out.name}.",
-                               suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, out)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    _write_atomically(out, text, parents=False)
     return out

@@ -224,7 +224,7 @@ def read_benchmark_file(path: str | os.PathLike[str]) -> BenchmarkFile:
     file = os.fspath(path)
     fmt = _format_of(file)
     try:
-        text = Path(file).read_text(encoding="utf-8")
+        text = Path(file).read_text(encoding="utf-8-sig")   # a BOM is accepted, as in TOML files
     except FileNotFoundError:
         raise ParameterError(file, "(file)", "no such file",
                              "give the path of an existing benchmark-parameter file") from None
@@ -272,14 +272,19 @@ def import_benchmark(
     return ImportedBicycle(params, text, read.notes)
 
 
-def _write_atomically(out: Path, text: str) -> None:
+def _write_atomically(out: Path, text: str, parents: bool = True) -> None:
     """Write ``text`` to ``out`` via a temporary file in the same folder and a rename, so a
-    failure never leaves a half-written file."""
-    out.parent.mkdir(parents=True, exist_ok=True)
+    failure never leaves a half-written file. The file gets the mode of any new file (0666
+    less the umask), not the temporary's private 0600. ``parents``: create missing folders."""
+    if parents:
+        out.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(text)
+        mask = os.umask(0o022)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
         os.replace(tmp, out)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
