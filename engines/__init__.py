@@ -21,10 +21,10 @@ from .base import (CAPABILITIES, CONTACTS, CapabilityError, Engine, EngineError,
 from .defaults import installed_engines, term_engines
 from .loading import (EngineInfo, LoadedEngines, engine_info, load_engine, load_engines,
                       parse_engine_options, split_options)
-from .registry import GROUP, EngineNotInstalled, available_engines, not_installed
+from .registry import GROUP, EngineNotInstalled, available_engines, default_engines, not_installed
 
 __all__ = ["CAPABILITIES", "CONTACTS", "GROUP", "CapabilityError", "Engine",
            "EngineError", "EngineInfo", "EngineLoadError", "EngineNotInstalled", "EngineSpecError",
-           "EngineUsageError", "LoadedEngines", "UnsupportedModel", "available_engines", "engine_info",
-           "installed_engines", "load_engine", "load_engines", "not_installed", "parse_engine_options",
-           "split_options", "term_engines"]
+           "EngineUsageError", "LoadedEngines", "UnsupportedModel", "available_engines",
+           "default_engines", "engine_info", "installed_engines", "load_engine", "load_engines",
+           "not_installed", "parse_engine_options", "split_options", "term_engines"]

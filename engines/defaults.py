@@ -4,10 +4,12 @@ registry and the engines' own facts (never a list of names).
     installed_engines()          # every registered engine that is installed, in registry order
     term_engines("thesis")       # those with terms (not the reference) that model that contact
 
-`run`'s default is every installed engine, `diagnose`'s, `sweep`'s and the conformance suite's
-the installed engines with terms (for `diagnose` and `sweep`: on the model's front contact). An
-engine whose extra is missing, or that fails to import, is left out here: the commands that
-list what did not run ask `engines.registry.not_installed` why.
+`run`'s default is every registered engine (`engines.registry.default_engines`: one whose extra
+is missing is listed as not run, with its pip line); `diagnose`'s and `sweep`'s the installed
+engines with terms on the model's front contact (`term_engines`); the conformance suite's every
+registered engine but the reference. An engine whose extra is missing, or that fails to
+import, is left out here: the commands that list what did not run ask
+`engines.registry.not_installed` why.
 """
 
 from __future__ import annotations

@@ -25,6 +25,7 @@ Nothing here imports an engine's library: reading the facts is cheap.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Callable
 
 __all__ = ["Costs", "EngineFacts", "FixedStep", "Refinement", "RunSetup", "SoftContact",
@@ -144,6 +145,7 @@ class EngineFacts:
         return self.name if not setup.suffix else f"{self.name}-{setup.suffix}"
 
 
+@lru_cache(maxsize=None)   # a class's declarations do not change within a process
 def engine_facts(spec: str) -> EngineFacts:
     """The facts the engine named by ``spec`` (a registered name or a ``module:Class`` /
     ``file.py:Class`` spec) declares; raises as `engines.registry.resolve` does."""

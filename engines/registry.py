@@ -49,7 +49,7 @@ from pathlib import Path
 from .base import Engine, EngineLoadError, EngineSpecError
 
 __all__ = ["DISTRIBUTION", "GROUP", "SPEC_FORMS", "EngineNotInstalled", "Registration",
-           "available_engines", "missing_modules", "not_installed", "registrations", "resolve"]
+           "available_engines", "default_engines", "missing_modules", "not_installed", "registrations", "resolve"]
 
 GROUP = "bicycle_xval.engines"
 DISTRIBUTION = "bicycle-xval"
@@ -117,6 +117,13 @@ def registrations() -> list[Registration]:
 
 def _canonical(dist: str | None) -> str:
     return re.sub(r"[-_.]+", "-", dist or "").lower()
+
+
+def default_engines() -> tuple[str, ...]:
+    """The engines a run compares when none is named: every registered engine (an engine whose
+    extra is not installed is then listed as not run, with its pip line). The one declared
+    place of that default."""
+    return available_engines()
 
 
 def available_engines() -> tuple[str, ...]:

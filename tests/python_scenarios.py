@@ -24,7 +24,7 @@ def _stability(psid: float) -> Scenario:
                       10: "places its frame in a vertical plane and stabilises"}[psid],
         tags=("stability",),
         expected_differences=(() if psid != 10 else (ExpectedDifference(
-            "convergence order", "exudyn-tree (disc contact) vs reference (thesis contact)",
+            "convergence order", "an engine with the disc contact vs the reference with the thesis contact",
             "model difference",
             "the thesis's front contact (the rim point along the fork's -z axis) and the true "
             "lowest point of the disc differ as soon as lean and steer are both non-zero (here "

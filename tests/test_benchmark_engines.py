@@ -23,7 +23,7 @@ from comparisons.judgments.convergence import reference_run
 from comparisons.judgments.energy import energy_drift
 from comparisons.judgments.terms import States, compare_term, random_states
 from comparisons.judgments.tolerances import load_tolerances
-from comparisons.stages.benchmark import MANOEUVRES, run_manoeuvres
+from comparisons.stages.benchmark import MANOEUVRES, fixed_step_runs, run_manoeuvres
 from engines import load_engine
 from reference_model import load_model
 from reference_model.model import DEP, IND
@@ -51,12 +51,13 @@ def bench():
 @pytest.fixture(scope="module")
 def runs(bench):
     """The three manoeuvres on the reference and both Exudyn builds at h = 1e-3 (~6 s)."""
-    return {mr.scenario.name: mr for mr in run_manoeuvres(bench, MANOEUVRES, ("tree", "redundant"),
-                                                                twins=False)}
+    from engines.facts import engine_facts
+    return {mr.scenario.name: mr for mr in run_manoeuvres(
+        MANOEUVRES, fixed_step_runs(engine_facts("exudyn")), twins=False)}
 
 
 def _trajectory(mr, engine):
-    return mr.reference if engine == "reference" else mr.exudyn[engine.split("-", 1)[1]]
+    return mr.reference if engine == "reference" else mr.engines[engine]
 
 
 # -- the scenarios -----------------------------------------------------------------------------
@@ -230,7 +231,7 @@ def test_energy_drift_is_bounded(bench, runs, name):
     # over ~1e3 steps, so < 1e-7 % (= 1e-9 relative) of E0 with margin
     mr = runs[name]
     assert energy_drift(bench, mr.reference)["drift_percent"] < 1e-7
-    for build, tr in mr.exudyn.items():
+    for build, tr in mr.engines.items():
         d = energy_drift(bench, tr)
         assert d["samples"] == 501
         assert d["drift_percent"] < IFTOMM_DRIFT_PERCENT, (build, d)

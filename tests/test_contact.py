@@ -144,8 +144,8 @@ def test_error_at_and_local_orders():
 
 @pytest.fixture(scope="module")
 def quick_study():
-    from comparisons.stages.mujoco_contact import mujoco_contact
-    return mujoco_contact(quick=True)
+    from comparisons.stages.soft_contact import contact_study
+    return contact_study("mujoco", quick=True)
 
 
 def test_stage_states_the_contact_settings(quick_study):
@@ -188,7 +188,8 @@ def test_a_wheel_lifts_off_where_ideal_rolling_needs_the_ground_to_pull(quick_st
 
 
 def test_disc_claims_replace_only_mujocos_entries():
-    from comparisons.stages.mujoco_contact import ON_DISC, DiscClaims, merge_claims
+    from comparisons.stages.soft_contact import DiscClaims, merge_claims, on_disc
+    ON_DISC = on_disc("MuJoCo")
     from comparisons.stages.results import Section
     base = [{"claim_id": "stability-psid10", "engine": e, "verdict": v, "evidence": "x"}
             for e, v in (("reference", "partly"), ("mujoco", "not assessed"))]
@@ -196,7 +197,7 @@ def test_disc_claims_replace_only_mujocos_entries():
                  "evidence": "y"})
     disc = DiscClaims([{"claim_id": "stability-psid10", "engine": "mujoco", "verdict": "partly",
                         "evidence": ON_DISC + "fell at 1.692 s"}], Section("s"))
-    out = merge_claims(base, disc)
+    out = merge_claims(base, disc, "mujoco")
     assert [(c["engine"], c["claim_id"], c["verdict"]) for c in out] == [
         ("reference", "stability-psid10", "partly"), ("mujoco", "stability-psid10", "partly"),
         ("mujoco", "check-pedal-torque", "not assessed")]

@@ -233,7 +233,8 @@ def test_energy_drift_is_iftomms_formula():
 def free_roll(disc):
     model = free_roll_model(disc)
     return model, {r["engine"].split()[0] + " " + r["engine"].split()[1]: r
-                   for r in energy_drifts(model, builds=("tree",))}
+                   for r in energy_drifts(model, engines=[("exudyn tree", load_engine(
+                       "exudyn", model, build="tree", step=1e-3))])}
 
 
 def test_free_roll_energy_drift(free_roll):
@@ -296,6 +297,6 @@ def test_quick_convergence_steps_can_reach_a_verdict():
     spanning MIN_SPAN, or every verdict is 'inconclusive' and the quick run fails. Planted:
     the full study's steps without the finest (span 4x) fails this."""
     from comparisons.judgments.convergence import MIN_SPAN
-    from comparisons.stages.engines import QUICK_CONVERGENCE_STEPS
+    from comparisons.stages.fixed_step import QUICK_CONVERGENCE_STEPS
     h = sorted(QUICK_CONVERGENCE_STEPS)
     assert len(h) >= 3 and h[-1] / h[0] >= MIN_SPAN

@@ -57,21 +57,27 @@ def test_a_model_run_asks_for_every_section(triangle):
     the stability picture and the linearization against the closed form, all on the model (planted: the model run returning before the
     engine sections, as it used to, fails this)."""
     from comparisons.stages.cases import build_cases, model_spec
-    from comparisons.stages.pipeline import Options, _tasks, select
+    from comparisons.stages.pipeline import Options, _stage_tasks, select
     from comparisons.stages.runs import setups_for
     from comparisons.stages.stability import critical
+    from comparisons.stages.stage import Plan
+    from engines.facts import engine_facts
     base = select(None, True, None)
     m = model_spec(triangle)
     opts = Options(base.scenarios, base.engines, True, models=(m,))
     cases, _ = build_cases(opts.scenarios, opts.models, ())
-    labels = [s.label for s in setups_for(opts.engines)]
-    keys = {t.key for t in _tasks(opts, labels, cases, {m.spec: critical(m.spec)})}
+    plan = Plan(opts, tuple(setups_for(opts.engines)), {e: engine_facts(e) for e in opts.engines},
+                tuple(cases), {m.spec: critical(m.spec)})
+    keys = {t.key for t in _stage_tasks(plan)}
     for engine in ("pinocchio", "exudyn", "kane", "mujoco"):
-        assert ("model-terms", engine, m.spec) in keys, engine
-        assert ("faults", engine, m.spec) in keys, engine
-    for kind in ("exudyn-convergence", "energy", "mujoco-contact", "stability-curves",
-                 "linear-check"):
-        assert (kind, m.spec) in keys, kind
+        assert ("terms", (engine, m.spec)) in keys, engine
+        assert ("faults", (engine, m.spec)) in keys, engine
+        if engine != "mujoco":   # a soft contact's energy is its study's, not conserved
+            assert ("energy", (engine, m.spec)) in keys, engine
+    for key in (("fixed-step", ("convergence", "exudyn", m.spec)),
+                ("soft-contact", ("study", "mujoco", m.spec)),
+                ("stability", ("curves", m.spec)), ("linear-check", m.spec)):
+        assert key in keys, key
 
 
 def test_mujoco_declares_the_bicycles_it_cannot_represent(triangle):
@@ -89,12 +95,12 @@ def test_a_declared_limitation_is_not_run_with_its_reason_everywhere(triangle):
     """The runs, the term section and the fault injection of MuJoCo on the triangle-breaking
     bicycle: 'not run on this model', with MuJoCo's reason; never a failure (planted: letting
     the loader's UnsupportedModel through run_one crashes the stage)."""
-    from comparisons.stages.engines import plugin_terms
+    from comparisons.stages.terms import plugin_terms
     from comparisons.stages.faults import fault_entries
     from comparisons.judgments.tolerances import load_tolerances
-    from comparisons.stages.runs import SETUPS, run_one
+    from comparisons.stages.runs import run_one, setup_of
     from reference_model.scenarios import SCENARIOS
-    run = run_one(SETUPS["mujoco"], SCENARIOS["stability-psid10"], triangle)
+    run = run_one(setup_of("mujoco"), SCENARIOS["stability-psid10"], triangle)
     assert run.status == "not run" and "not run on this model" in run.message
     assert "A + B >= C" in run.message
     sec = plugin_terms(load_tolerances(), "mujoco", {}, 4, (triangle,))

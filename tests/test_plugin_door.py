@@ -42,6 +42,18 @@ def test_run_with_a_file_spec_compares_its_terms(tmp_path):
     assert all(c["passed"] for c in mine)
     runs = {r["engine"]: r["status"] for r in summary["engine_runs"]}
     assert runs["NumpyEngine"] == "not run"       # no run_inverse: recorded, not dropped
+    # a plugin gets every section its capabilities allow, as a built-in does (issue 22):
+    # fault injection (planted: the faults stage asking for a list of built-in names leaves it
+    # out, and this fails), the energy drift (it simulates), the benchmark's terms
+    faults = [f for f in summary["faults"] if f["engine"] == "NumpyEngine"]
+    assert len(faults) == 6 and all(f["verdict"] == "localized" for f in faults), faults
+    report = (out / "report.md").read_text()
+    assert "Reference vs NumpyEngine, term by term" in report
+    energy = [c for c in summary["comparisons"] if c["quantity"] == "energy drift percent"]
+    assert any(c["engines"] == ["NumpyEngine"] and c["passed"] for c in energy), energy
+    bench = [c for c in summary["comparisons"] if c["model"] == "benchmark"
+             and c["engines"] == ["reference", "NumpyEngine"]]
+    assert {"mass_matrix", "forward_acceleration"} <= {c["quantity"] for c in bench}
 
 
 def test_an_engine_that_cannot_be_built_is_dropped_and_named(tmp_path, capsys):

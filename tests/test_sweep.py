@@ -330,8 +330,9 @@ def test_default_engines_and_the_runs_come_from_the_engines_facts(benchmark_para
     assert {"pinocchio", "exudyn", "kane", "mujoco"} <= set(default.engines)
     runs = run_options(default)
     assert list(runs)[0] == "reference" and "mujoco" not in runs
-    assert runs["exudyn"] == ("exudyn", {"build": "tree", "step": 1e-3})
-    assert runs["pinocchio"] == ("pinocchio", {}) and "kane" in runs
+    assert (runs["exudyn"].engine, dict(runs["exudyn"].options)) == \
+        ("exudyn", {"build": "tree", "step": 1e-3})
+    assert runs["pinocchio"].options == () and "kane" in runs
     plugin = f"{EXAMPLE_ENGINE}:NumpyEngine"
     only = make_spec(benchmark_params, varies=["m3=80:90:2"], checks=("eigen", "runs"),
                      engines=(plugin,))

@@ -96,7 +96,7 @@ def cmd_compare_trajectory(args) -> int:
     from ..judgments.claims import judge_claims
     from ..judgments.convergence import reference_horizon
     from ..judgments.scenario_compare import compare_constraints, compare_forward, compare_inverse
-    from ..stages.runs import run_one, SETUPS
+    from ..stages.runs import run_one, setup_of
     from .tolerance_option import tolerances_from
 
     sc = get_scenario(args.scenario)
@@ -104,7 +104,7 @@ def cmd_compare_trajectory(args) -> int:
     theirs = read_run(args.csv, sc, label)
     model = load_model(sc.model)
     tols = tolerances_from(args)
-    ref = run_one(SETUPS["reference"], sc.name)
+    ref = run_one(setup_of("reference"), sc.name)
     comps = []
     if sc.kind == "inverse":
         if theirs.lam is None:
@@ -121,7 +121,7 @@ def cmd_compare_trajectory(args) -> int:
         comps.append(compare_constraints(model, theirs, tols))
     runs = {("reference", sc.name): ref, (label, sc.name): theirs}
     if sc.name == "replay":
-        runs[("reference", "zigzag")] = run_one(SETUPS["reference"], "zigzag")
+        runs[("reference", "zigzag")] = run_one(setup_of("reference"), "zigzag")
     claims = [c for c in judge_claims(runs, [label], load_model("thesis"), [sc.name])
               if c["verdict"] != "not assessed"]   # claims needing other scenarios too
     print(f"{label} on {sc.name} ({theirs.message}) against the reference ({model.name}):")

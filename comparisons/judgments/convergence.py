@@ -280,12 +280,18 @@ def _verdict(steps, errors, order) -> tuple[str, str]:
 
 
 def _engine_label(traj: Trajectory) -> str:
+    """The engine of a run as its settings describe it: name, build and contact when it says,
+    and its solver."""
     s = traj.settings
-    if s.get("engine") == "exudyn":
-        return (f"exudyn {s.get('build')} ({s.get('contact')} contact), {s.get('solver_type')}"
-                + (f" rho_inf {s['spectral_radius']:g}" if s.get("solver_type") == "GeneralizedAlpha"
-                   else ""))
-    return str(s.get("engine", s.get("integrator", "engine")))
+    name = str(s.get("engine", s.get("integrator", "engine")))
+    if "build" in s:
+        name += f" {s['build']}"
+    if "contact" in s:
+        name += f" ({s['contact']} contact)"
+    if "solver_type" in s:
+        name += f", {s['solver_type']}" + (f" rho_inf {s['spectral_radius']:g}"
+                                           if "spectral_radius" in s else "")
+    return name
 
 
 def convergence_study(model_for_reference: Model, engine_factory: Callable[[float], object],

@@ -16,7 +16,7 @@ Energies are the reference model's (`kinetic_energy`, `potential_energy`) evalua
 trajectory's q, dq, so every engine is measured with the same yardstick.
 
     model = free_roll_model(load_model("thesis-disc"))          # cv = 0
-    for row in energy_drifts(model): print(describe_drift(row))
+    for row in energy_drifts(model, [("my engine", engine)]): print(describe_drift(row))
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from reference_model import Model
 from reference_model.scenarios import Scenario, TorqueSamples, run_forward
 from reference_model.solvers import Trajectory
 
-__all__ = ["applies_torques", "energy_drift", "free_roll_model", "free_roll_scenario", "energy_drifts",
+__all__ = ["applies_torques", "energy_drift", "free_roll_model", "free_roll_scenario", "energy_drifts", "describe_run_settings",
            "describe_drift", "FREE_ROLL_DURATION"]
 
 # 1 s: the free roll (like stability-psid10 without the pedal torque) falls at 2.04 s, and from
@@ -98,14 +98,28 @@ def applies_torques(scenario: Scenario) -> bool:
     return bool(np.any(np.asarray(T, dtype=float) != 0.0))
 
 
-def energy_drifts(model: Model, scenario: Scenario | None = None, step: float = 1e-3,
-                  builds=("tree", "redundant"), reference_rtol: float = 1e-10,
-                  exudyn_options: dict | None = None) -> list[dict]:
-    """Drift of the reference (DOP853 at ``reference_rtol``, projection) and of each Exudyn
-    build at ``step`` on ``scenario`` (default the free roll); ``model`` must have cv = 0.
-    Each row: energy_drift's numbers plus 'engine', 'status', 'settings'."""
-    from engines import load_engine
+def describe_run_settings(settings: dict) -> str:
+    """An engine run's integrator in a phrase, from the keys a Trajectory's ``settings`` may
+    carry (step, solver_type, spectral_radius, integrator, rtol)."""
+    parts = []
+    if "step" in settings:
+        parts.append(f"h = {settings['step']:g}")
+    if "solver_type" in settings:
+        parts.append(str(settings["solver_type"])
+                     + (f" spectral radius {settings['spectral_radius']:g}"
+                        if "spectral_radius" in settings else ""))
+    elif "integrator" in settings:
+        parts.append(str(settings["integrator"])
+                     + (f" rtol {settings['rtol']:.0e}" if "rtol" in settings else ""))
+    return ", ".join(parts) or "its defaults"
 
+
+def energy_drifts(model: Model, scenario: Scenario | None = None, engines=(),
+                  reference_rtol: float = 1e-10) -> list[dict]:
+    """Drift of the reference (DOP853 at ``reference_rtol``, projection) and of each engine of
+    ``engines`` ((label, built engine) pairs) on ``scenario`` (default the free roll);
+    ``model`` must have cv = 0. Each row: energy_drift's numbers plus 'engine', 'status',
+    'settings'."""
     if model.params.cv != 0.0:
         raise ValueError(f"the energy check needs a drag-free model (cv = 0); got cv = "
                          f"{model.params.cv}: use free_roll_model(model)")
@@ -116,15 +130,10 @@ def energy_drifts(model: Model, scenario: Scenario | None = None, step: float = 
     rows = [{"engine": f"reference {model.name}", "status": ref.status,
              "settings": f"DOP853 rtol {reference_rtol:.0e}, projection",
              **energy_drift(model, ref)}]
-    for build in builds:
-        eng = load_engine("exudyn", model, build=build, step=step, **(exudyn_options or {}))
+    for label, eng in engines:
         tr = eng.simulate(sc)
-        s = tr.settings
-        how = f"h = {step:g}, {s['solver_type']}"
-        if s["solver_type"] == "GeneralizedAlpha":
-            how += f" spectral radius {s['spectral_radius']:g}"
-        rows.append({"engine": f"exudyn {build}", "status": tr.status, "settings": how,
-                     **energy_drift(model, tr)})
+        rows.append({"engine": label, "status": tr.status,
+                     "settings": describe_run_settings(tr.settings), **energy_drift(model, tr)})
     return rows
 
 

@@ -102,21 +102,16 @@ def _short(x: float) -> str:
     return f"{x:.0e}".replace("e-0", "e-").replace("e+0", "e+")
 
 
-#: how each kind of engine's trajectory is judged: with the reference's own integrator and
-#: tolerances ([trajectory]); with its own integrator, directly ([trajectory_conformance]); or
-#: reported here and judged by a convergence study (None)
-SAME_SOLVER_ENGINES = ("pinocchio", "kane")
-
-
 def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols,
-                    judged_by: str | None = "auto") -> tuple[list[dict], TrajectoryError]:
+                    judged_by: str | None = "trajectory",
+                    reported_because: str = "its convergence order"
+                    ) -> tuple[list[dict], TrajectoryError]:
     """Trajectory (8 coordinates, up to the horizon) of ``other`` against the reference.
-    ``judged_by``: the tolerance entry that judges it, None to report it only, "auto" for the
-    built-ins (Pinocchio and Kane run the reference's solver: [trajectory]; Exudyn is judged
-    by its convergence order)."""
+    ``judged_by``: the tolerance table that judges it, as the engine declares
+    (`engines.facts`: ``trajectory_tolerance``): [trajectory] for a run with the reference's own
+    integrator and tolerances, [trajectory_conformance] for an engine's own integrator; None to
+    report it only, judged elsewhere by what ``reported_because`` names."""
     te = trajectory_error(ref, other, horizon.t)
-    if judged_by == "auto":
-        judged_by = "trajectory" if other.engine in SAME_SOLVER_ENGINES else None
     same_solver = judged_by == "trajectory"
     tol = tols[judged_by] if judged_by else None
     comp = {
@@ -130,8 +125,8 @@ def compare_forward(model, ref: Run, other: Run, horizon: Horizon, tols,
         "horizon": horizon.t, "horizon_reason": horizon.reason,
         "note": ("same integrator and formulation as the reference: judged" if same_solver else
                  f"its own integrator: judged by [{judged_by}]" if tol else
-                 "a fixed-step integrator: reported here, judged by its convergence order"),
-        "why": "" if tol else "fixed-step integrator, judged by its convergence order",
+                 f"reported here, judged by {reported_because}"),
+        "why": "" if tol else f"judged by {reported_because}",
     }
     return [comp], te
 

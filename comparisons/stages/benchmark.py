@@ -5,9 +5,9 @@ section's stages.
 
 Three parts, all on ``load_model("benchmark")`` (true disc front contact, cv = 0):
 
-(a) **Terms.** Pinocchio and Exudyn's kinematic tree against the reference at deterministic
-    random states (`comparisons.terms`, tolerances from `tolerances.toml`) and M at the upright
-    configuration (theta = gamma = 0, beta = -pi/10 solved from the contact).
+(a) **Terms.** Every selected engine that declares a term against the reference at
+    deterministic random states (`comparisons.terms`, tolerances from `tolerances.toml`) and M at
+    the upright configuration (theta = gamma = 0, beta = -pi/10 solved from the contact).
 
 (b) **The IFToMM "uncontrolled bicycle" manoeuvres** (scenarios ``benchmark-v4``,
     ``benchmark-v4.6``, ``benchmark-v8``: 4, 4.6 and 8 m/s with roll rates 0.05, 0.5 and 0.05
@@ -15,10 +15,11 @@ Three parts, all on ``load_model("benchmark")`` (true disc front contact, cv = 0
     problem, ``Examples/bicycleIftommBenchmark.py``: tEnd = 5, sensors every 0.01 s, outputs roll
     angle and rate, forward speed, potential, kinetic and mechanical energy, steer angle and
     rate; an older revision of that file ran 20 s). Each on the reference (DOP853, rtol 1e-11,
-    projection) and on Exudyn (tree and redundant builds, h = 1e-3):
+    projection) and on every variant of each selected fixed-step engine
+    (`engines.facts.FixedStep`) at its step:
 
     * the error against time up to the meaningful horizon (`convergence.reference_horizon`),
-      reported; on ``benchmark-v4.6`` (full run only) the tree's convergence order judges it;
+      reported; on ``benchmark-v4.6`` (full run only) the engine's convergence order judges it;
     * the constraint residual of every run (tolerance ``constraint_residual``);
     * the IFToMM energy drift 100 (Emax - Emin) / |E0| % over the 0.01 s output samples
       (`comparisons.energy`), judged against IFToMM's acceptance of 1e-3 % (the criterion
@@ -49,9 +50,9 @@ Three parts, all on ``load_model("benchmark")`` (true disc front contact, cv = 0
     rtol 1e-11, amplified by the pencil's conditioning, its 4th singular value 1e-3 to 1e-2 of
     the 1st). And the deviation must *be* the nonlinearity: between the 1e-3 and 1e-2 rad/s
     runs it must scale as a^order with order in [1.8, 2.2] (a model difference would not vanish
-    with the amplitude). Exudyn's fits on the IFToMM runs are compared with the reference's fits
-    on the same runs (the nonlinearity cancels): tolerance 1e-4 relative, the relative error of
-    a second-order scheme in a mode's frequency and damping, O((omega h)^2) = (8.5e-3)^2 = 7e-5
+    with the amplitude). The engines' fits on the IFToMM runs are compared with the reference's
+    fits on the same runs (the nonlinearity cancels): tolerance 1e-4 relative, the relative error
+    of a second-order scheme in a mode's frequency and damping, O((omega h)^2) = (8.5e-3)^2 = 7e-5
     for the weave at 8 m/s and h = 1e-3.
 
 Plus the eigenvalues-against-speed figure (`comparisons.eigenvalues.eigenvalue_figure`).
@@ -81,20 +82,13 @@ from ..judgments.energy import energy_drift
 from ..judgments.terms import States, compare_terms, random_states
 from ..judgments.tolerances import Tolerances
 from .results import Section
+from .stage import Assembled, Plan, Stage
 
 MODEL = "benchmark"
 MANOEUVRES = ("benchmark-v4", "benchmark-v4.6", "benchmark-v8")
-EXUDYN_STEP = 1e-3                 # s: divides the IFToMM output interval 0.01 s
-#: Exudyn's Newton Jacobian recomputed every step on this bicycle: 2.5 instead of 7.5 Newton
-#: iterations per step and 0.59x the run time of its default (`engines.exudyn.engine`
-#: JACOBIAN_UPDATES has the measurements); the runs move by up to 2e-8 rad, max |C| stays
-#: below 1.1e-8, and every verdict of the section is unchanged
-EXUDYN_JACOBIAN = "per-step"
-BUILDS = ("tree", "redundant")
-QUICK_BUILDS = ("tree",)
-#: --quick runs Exudyn on this manoeuvre only (the decaying weave between the critical speeds);
-#: the other two are run and judged on the reference (1.3 s of Exudyn each saved)
-QUICK_EXUDYN_MANOEUVRES = ("benchmark-v4.6",)
+#: --quick runs the engines on this manoeuvre only (the decaying weave between the critical
+#: speeds), with their quick variants; the other two are run and judged on the reference
+QUICK_ENGINE_MANOEUVRES = ("benchmark-v4.6",)
 SMALL_ROLL_RATES = (1e-3, 1e-2)    # rad/s: small-amplitude twins of every manoeuvre
 ORDER_BAND = (1.8, 2.2)            # the deviation's order in the amplitude
 CONVERGENCE_SCENARIO = "benchmark-v4.6"
@@ -105,30 +99,45 @@ DIVERGED = 1e-6                    # rad or m: 'first past' threshold
 
 # -- the runs (stages: worker processes call these) --------------------------------------------
 
+@dataclass(frozen=True)
+class BenchmarkRun:
+    """One engine run of the manoeuvres: its report label, the engine's spec and options."""
+
+    label: str
+    spec: str
+    options: tuple[tuple[str, object], ...] = ()
+
+
+def fixed_step_runs(facts, quick: bool = False) -> tuple[BenchmarkRun, ...]:
+    """The manoeuvre runs of one fixed-step engine: each variant (``quick``: its quick ones)
+    at its step with its declared benchmark options."""
+    fx = facts.fixed_step
+    variants = fx.quick_variants or fx.variant_names[:1] if quick else fx.variant_names
+    return tuple(BenchmarkRun("-".join(x for x in (facts.name, v) if x), facts.spec,
+                              tuple(sorted(fx.variant_options(
+                                  v, **{fx.option: fx.step}, **dict(fx.benchmark_options)).items())))
+                 for v in variants)
+
+
 @dataclass
 class ManoeuvreRuns:
-    """One manoeuvre on the reference and on the Exudyn builds, with its small-amplitude twins'
+    """One manoeuvre on the reference and on the engines' runs, with its small-amplitude twins'
     mode fits (reference only)."""
 
     scenario: Scenario
     speed: float
     reference: Trajectory
     horizon: Horizon
-    exudyn: dict[str, Trajectory] = field(default_factory=dict)
+    engines: dict[str, Trajectory] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
     small_fits: list[ModeFit] = field(default_factory=list)
 
 
-def quick_builds(name: str) -> tuple[str, ...]:
-    """The Exudyn builds that run manoeuvre ``name`` in ``--quick``."""
-    return QUICK_BUILDS if name in QUICK_EXUDYN_MANOEUVRES else ()
-
-
-def benchmark_manoeuvre(name: str, builds: Sequence[str] = BUILDS,
-                        step: float = EXUDYN_STEP, twins: bool = True) -> ManoeuvreRuns:
+def benchmark_manoeuvre(name: str, engines: Sequence[BenchmarkRun] = (),
+                        twins: bool = True) -> ManoeuvreRuns:
     """The manoeuvre on the reference (DOP853 rtol 1e-11, projection) with its horizon (one twin
-    run), on each Exudyn build at ``step``, and (``twins``) its small-amplitude twins on the
-    reference, whose mode fits the nonlinear-against-linear part of the section needs."""
+    run), on each of ``engines``, and (``twins``) its small-amplitude twins on the reference,
+    whose mode fits the nonlinear-against-linear part of the section needs."""
     model = load_model(MODEL)
     sc = SCENARIOS[name]
     t0 = time.perf_counter()
@@ -136,41 +145,40 @@ def benchmark_manoeuvre(name: str, builds: Sequence[str] = BUILDS,
     hor = reference_horizon(model, sc, reference=ref)
     runs = ManoeuvreRuns(sc, speed_of(model, sc), ref, hor,
                          seconds={"reference + twin": time.perf_counter() - t0})
-    for build in builds:
+    for run in engines:
         t0 = time.perf_counter()
-        runs.exudyn[build] = load_engine("exudyn", model, build=build, step=step,
-                                          jacobian=EXUDYN_JACOBIAN).simulate(sc)
-        runs.seconds[f"exudyn {build}"] = time.perf_counter() - t0
+        runs.engines[run.label] = load_engine(run.spec, model, **dict(run.options)).simulate(sc)
+        runs.seconds[run.label] = time.perf_counter() - t0
     for rate in SMALL_ROLL_RATES if twins else ():
         twin = with_roll_rate(sc, rate)
         runs.small_fits += mode_fits(model, twin, reference_run(model, twin))
     return runs
 
 
-def run_manoeuvres(model: Model | None = None, names: Sequence[str] = MANOEUVRES,
-                   builds: Sequence[str] = BUILDS, step: float = EXUDYN_STEP,
+def run_manoeuvres(names: Sequence[str] = MANOEUVRES, engines: Sequence[BenchmarkRun] = (),
                    twins: bool = True) -> list[ManoeuvreRuns]:
     """Every manoeuvre in this process (the pipeline runs them as parallel stages instead)."""
-    return [benchmark_manoeuvre(n, builds, step, twins) for n in names]
+    return [benchmark_manoeuvre(n, engines, twins) for n in names]
 
 
-def benchmark_terms(tolerances: Tolerances, quick: bool) -> Section:
-    """Pinocchio and Exudyn's tree against the reference at random states and M upright."""
+def benchmark_terms(tolerances: Tolerances, quick: bool,
+                    engines: Sequence[tuple[str, dict]] = ()) -> Section:
+    """Each of ``engines`` ((spec, options) pairs) against the reference at random states and
+    M upright. A stage."""
+    from .runs import label_of
     sec = Section("benchmark terms")
     model = load_model(MODEL)
-    n_pin, n_exu = (50, 20) if quick else (200, 100)
+    n = 50 if quick else 200
     ref = load_engine("reference", model)
-    engines = {"pinocchio": load_engine("pinocchio", model),
-               "exudyn-tree": load_engine("exudyn", model, build="tree")}
+    built = {label_of(spec): load_engine(spec, model, **dict(opts)) for spec, opts in engines}
     q_up = upright_state(model)
     upright = States(q_up[None, :], np.zeros((1, 8)), np.zeros((1, 8)), np.zeros((1, 3)))
     sec.heading("Terms")
-    sec.text(f"Deterministic random states (large lean, steer near ±π/2, rates up to 20 rad/s; "
-             f"{n_pin} for Pinocchio, {n_exu} for Exudyn's tree) and M at the upright "
+    sec.text(f"{n} deterministic random states (large lean, steer near ±π/2, rates up to "
+             f"20 rad/s) and M at the upright "
              f"configuration (beta = {q_up[5]:+.15f} rad, -π/10 = {-np.pi / 10:+.15f}).")
     rows = []
-    for label, eng in engines.items():
-        n = n_pin if label == "pinocchio" else n_exu
+    for label, eng in built.items():
         for states, where, quantities in ((random_states(n, seed=7), f"random-states-{n}", None),
                                           (upright, "upright", ("mass_matrix",))):
             for r in compare_terms(ref, eng, states, tolerances, quantities):
@@ -185,12 +193,15 @@ def benchmark_terms(tolerances: Tolerances, quick: bool) -> Section:
     return sec
 
 
-def benchmark_convergence() -> ConvergenceStudy:
-    """Exudyn's tree on ``CONVERGENCE_SCENARIO`` at four steps against the reference."""
+def benchmark_convergence(run: BenchmarkRun, step_option: str = "step",
+                          steps: Sequence[float] = DEFAULT_STEPS) -> ConvergenceStudy:
+    """One engine run's convergence on ``CONVERGENCE_SCENARIO`` at four steps (its
+    ``step_option``) against the reference. A stage."""
     model = load_model(MODEL)
-    return convergence_study(model, lambda h: load_engine("exudyn", model, build="tree", step=h,
-                                                               jacobian=EXUDYN_JACOBIAN),
-                             SCENARIOS[CONVERGENCE_SCENARIO], steps=DEFAULT_STEPS,
+    opts = {k: v for k, v in run.options if k != step_option}
+    return convergence_study(model, lambda h: load_engine(run.spec, model, **opts,
+                                                          **{step_option: h}),
+                             SCENARIOS[CONVERGENCE_SCENARIO], steps=steps,
                              horizon=CONVERGENCE_HORIZON)
 
 
@@ -204,15 +215,17 @@ def _first_past(err: dict) -> str:
     return f"{max(COORDINATES, key=lambda c: err[c][i])} at {err['t'][i]:.2f} s"
 
 
-def _manoeuvre_part(tols: Tolerances, sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None:
+def _manoeuvre_part(tols: Tolerances, sec: Section, model: Model, runs: list[ManoeuvreRuns],
+                    settings: dict[str, str]) -> None:
     c_tol = tols["constraint_residual"].tolerance
     drift_tol = tols["iftomm_energy_drift"].tolerance
-    sec.heading("IFToMM uncontrolled bicycle: reference against Exudyn")
+    labels = list(dict.fromkeys(lab for mr in runs for lab in mr.engines))
+    sec.heading("IFToMM uncontrolled bicycle: reference against "
+                + (", ".join(labels) if labels else "no engine (none selected is fixed-step)"))
     sec.text(
-        "5 s, output every 0.01 s (IFToMM). Reference: DOP853 rtol 1e-11, projection. Exudyn: "
-        f"h = {EXUDYN_STEP:g} s, generalized-alpha (spectral radius 0.9), Newton's Jacobian "
-        f"{'recomputed every step' if EXUDYN_JACOBIAN == 'per-step' else 'kept while it converges'}. "
-        "Errors in all eight "
+        "5 s, output every 0.01 s (IFToMM). Reference: DOP853 rtol 1e-11, projection. "
+        + "; ".join(f"{lab}: {how}" for lab, how in settings.items())
+        + (". " if settings else "") + "Errors in all eight "
         "coordinates up to the horizon where two reference runs 1e-9 rad/s apart in "
         "theta_dot(0) separate by 1e-6; reported, not judged (the convergence check below "
         "judges them). Energy drift 100 (Emax - Emin)/|E0| over the 0.01 s output, judged "
@@ -222,7 +235,7 @@ def _manoeuvre_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
     rows, panels, error_panels = [], [], []
     for mr in runs:
         name, ref = mr.scenario.name, mr.reference
-        engines = {"reference": ref, **{f"exudyn-{b}": tr for b, tr in mr.exudyn.items()}}
+        engines = {"reference": ref, **mr.engines}
         panel = {"title": f"{name}: v = {mr.speed:g} m/s, roll rate {mr.scenario.dq_ind0[0]:g} "
                           f"rad/s ({expected_outcome(mr.speed)})",
                  "lines": {lab: (tr.t, tr.q[:, THETA]) for lab, tr in engines.items()}}
@@ -259,19 +272,19 @@ def _manoeuvre_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
                          f"(ground as zero of V), E_end - E0 = {drift['E_end_minus_E0']:+.2e} J")})
         if len(engines) == 1:
             continue
-        error_panels.append({"title": f"{name}: Exudyn (h = {EXUDYN_STEP:g} s) against the "
+        error_panels.append({"title": f"{name}: {', '.join(mr.engines)} against the "
                                       f"reference up to the horizon ({mr.horizon.t:.2f} s)",
                              "curves": curves})
     sec.table(("scenario", "v [m/s]", "engine", "status", "horizon [s]",
                "max error to the horizon [rad, m]", f"first past {DIVERGED:g}", "max abs C [m, m/s]",
                "drift [% of E0]"), rows)
     sec.figure("benchmark_roll.png", "lean_panels", panels=panels, ylabel="theta (lean) [rad]")
-    if error_panels:   # none when no manoeuvre ran on Exudyn
+    if error_panels:   # none when no manoeuvre ran on an engine
         sec.figure("benchmark_error.png", "error_panels", panels=error_panels, threshold=DIVERGED)
-    alone = [mr.scenario.name for mr in runs if not mr.exudyn]
-    if alone:
-        sec.text(f"Run on the reference only (`--quick`: Exudyn runs "
-                 f"{', '.join(mr.scenario.name for mr in runs if mr.exudyn) or 'none of them'}): "
+    alone = [mr.scenario.name for mr in runs if not mr.engines]
+    if alone and labels:
+        sec.text(f"Run on the reference only (`--quick`: the engines run "
+                 f"{', '.join(mr.scenario.name for mr in runs if mr.engines) or 'none of them'}): "
                  f"{', '.join(alone)}.")
     sec.text("Initial states (projected once, used by every engine): " + "; ".join(
         f"{mr.scenario.name}: {mr.reference.settings['initial_correction']}" for mr in runs) + ".")
@@ -290,7 +303,7 @@ def _outcome_part(sec: Section, model: Model, runs: list[ManoeuvreRuns]) -> None
     for mr in runs:
         lin = eigenvalues(model, mr.speed)
         for label, tr in {"reference": mr.reference,
-                          **{f"exudyn-{b}": t for b, t in mr.exudyn.items()}}.items():
+                          **mr.engines}.items():
             o = judge_outcome(mr.scenario.name, mr.speed, tr, label)
             linear = lin[2].real if o.expected == "slow capsize" else lin[0].real
             rows.append((o.scenario, label, o.expected, f"{o.measured:+.4f}", f"{linear:+.4f}",
@@ -316,15 +329,15 @@ def _nonlinear_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
         "difference.")
     fits: list[ModeFit] = []
     by_speed: dict[str, list[ModeFit]] = {}
-    exudyn_rows = []
+    engine_rows = []
     for mr in runs:
         group = list(mr.small_fits) + mode_fits(model, mr.scenario, mr.reference)
         by_speed[mr.scenario.name] = group
         fits += group
         ref_weave = next(f for f in group if f.mode == "weave" and f.scenario == mr.scenario.name)
-        for build, tr in mr.exudyn.items():
-            f = mode_fits(model, mr.scenario, tr, engine=f"exudyn-{build}", modes=("weave",))[0]
-            exudyn_rows.append((f, ref_weave, abs(f.fitted - ref_weave.fitted) / abs(ref_weave.fitted)))
+        for label, tr in mr.engines.items():
+            f = mode_fits(model, mr.scenario, tr, engine=label, modes=("weave",))[0]
+            engine_rows.append((f, ref_weave, abs(f.fitted - ref_weave.fitted) / abs(ref_weave.fitted)))
     rows = []
     for f in fits:
         ok = f.deviation <= f.tolerance
@@ -340,16 +353,18 @@ def _nonlinear_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
     sec.table(("scenario", "engine", "mode", "a [rad]", "fitted [1/s]", "linear [1/s]",
                "rel. deviation", "tolerance", "verdict"), rows)
     fit_tol = tols["benchmark_weave_fit"].tolerance
-    sec.text("Exudyn's weave fits on the IFToMM runs against the reference's fit on the same run "
+    if not engine_rows:
+        return _order_part(sec, model, by_speed)
+    sec.text("The engines' weave fits on the IFToMM runs against the reference's fit on the same run "
              f"(the nonlinearity cancels); tolerance {fit_tol:.0e} relative, the O((omega h)^2) "
              "error of the integrator at h = 1e-3:")
     rows = []
-    for f, r, dev in exudyn_rows:
+    for f, r, dev in engine_rows:
         ok = dev <= fit_tol
         rows.append((f.scenario, f.engine, _cx(f.fitted), _cx(r.fitted), f"{dev:.1e}",
                      "pass" if ok else "FAIL"))
         sec.comparisons.append({
-            "quantity": "weave eigenvalue fit, exudyn vs reference (same run)",
+            "quantity": "weave eigenvalue fit, engine vs reference (same run)",
             "scenario": f.scenario, "model": model.name,
             "engines": ["reference", f.engine], "max_error": dev,
             "tolerance": fit_tol, "passed": bool(ok),
@@ -357,6 +372,11 @@ def _nonlinear_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
             "note": "same amplitude, so the nonlinearity cancels; (omega h)^2 integrator error"})
     sec.table(("scenario", "engine", "fitted [1/s]", "reference fit [1/s]", "rel. difference",
                "verdict"), rows)
+    _order_part(sec, model, by_speed)
+
+
+def _order_part(sec: Section, model: Model, by_speed: dict) -> None:
+    """The deviation's order in the amplitude, between the two small roll rates."""
     rows, curves = [], []
     for name, group in by_speed.items():
         for mode in ("weave", "capsize"):
@@ -383,13 +403,13 @@ def _nonlinear_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
                coefficient=NONLINEAR_COEFFICIENT, floor=FIT_FLOOR)
 
 
-def _convergence_part(sec: Section, model: Model, study: ConvergenceStudy) -> None:
+def _convergence_part(sec: Section, model: Model, label: str, study: ConvergenceStudy) -> None:
     ok = study.verdict == "converges"
-    sec.heading("Exudyn convergence on the benchmark")
+    sec.heading(f"{label} convergence on the benchmark")
     sec.text(study.describe())
     sec.comparisons.append({
         "quantity": "convergence order", "scenario": CONVERGENCE_SCENARIO, "model": model.name,
-        "engines": ["reference", "exudyn-tree"], "max_error": study.difference, "tolerance": None,
+        "engines": ["reference", label], "max_error": study.difference, "tolerance": None,
         "order": study.order, "steps": list(study.steps), "errors": list(study.errors),
         "verdict": study.verdict, "expected": "converges", "passed": ok,
         "localized_to": f"order {study.order:.2f}, worst coordinate {study.worst[-1]}",
@@ -437,19 +457,90 @@ def _eigenvalue_part(tols: Tolerances, sec: Section, model: Model) -> None:
 
 
 def benchmark_section(tolerances: Tolerances, quick: bool, runs: list[ManoeuvreRuns],
-                      terms: Section, convergence: ConvergenceStudy | None) -> Section:
+                      terms: Section | None, convergence: dict[str, ConvergenceStudy],
+                      settings: dict[str, str] | None = None) -> Section:
     """The benchmark bicycle's section of the report (module docstring) from its stages'
-    results: terms, the IFToMM manoeuvres on the reference and Exudyn, physics, nonlinear
-    against linear, Exudyn's convergence (full runs only), Table 2 and the eigenvalue figure."""
+    results: terms, the IFToMM manoeuvres on the reference and the fixed-step engines, physics,
+    nonlinear against linear, each engine's convergence (full runs only), Table 2 and the
+    eigenvalue figure."""
     sec = Section("Benchmark bicycle (Meijaard et al. 2007): engines, IFToMM uncontrolled "
                   "bicycle, nonlinear against linear")
     model = load_model(MODEL)
-    sec.blocks += terms.blocks
-    sec.comparisons += terms.comparisons
-    _manoeuvre_part(tolerances, sec, model, runs)
+    if terms is not None:
+        sec.blocks += terms.blocks
+        sec.comparisons += terms.comparisons
+    _manoeuvre_part(tolerances, sec, model, runs, settings or {})
     _outcome_part(sec, model, runs)
     _nonlinear_part(tolerances, sec, model, runs)
-    if convergence is not None:
-        _convergence_part(sec, model, convergence)
+    for label, study in convergence.items():
+        _convergence_part(sec, model, label, study)
     _eigenvalue_part(tolerances, sec, model)
     return sec
+
+
+def _settings_line(facts) -> str:
+    fx = facts.fixed_step
+    extra = ", ".join(f"{k} {v}" for k, v in fx.benchmark_options)
+    return (f"{fx.option} = {fx.step:g} s" + (f", {fx.describe}" if fx.describe else "")
+            + (f", {extra}" if extra else ""))
+
+
+class BenchmarkStage(Stage):
+    """The benchmark bicycle's section (module docstring): the run without ``--model``."""
+
+    name, section = "benchmark", "benchmark"
+
+    def _runs(self, plan: Plan) -> list:
+        return [f for f in plan.engines(lambda f: f.fixed_step is not None
+                                        and "simulate" in f.capabilities)]
+
+    def tasks(self, plan: Plan) -> list:
+        from .pool import Task
+        if plan.opts.models:
+            return []
+        out = []
+        with_terms = tuple((f.spec, plan.options_for(f.spec)) for f in plan.engines(
+            lambda f: f.has_terms))
+        if with_terms:
+            out.append(Task("terms", benchmark_terms, (plan.tolerances, plan.quick, with_terms),
+                            sum(plan.facts[s].costs.terms for s, _ in with_terms),
+                            "benchmark terms"))
+        fixed = self._runs(plan)
+        for n in MANOEUVRES:
+            runs = tuple(r for f in fixed for r in fixed_step_runs(f, plan.quick)) \
+                if not plan.quick or n in QUICK_ENGINE_MANOEUVRES else ()
+            out.append(Task(("manoeuvre", n), benchmark_manoeuvre, (n, runs),
+                            0.5 + 1.5 * len(runs), f"benchmark {n}"))
+        if not plan.quick:
+            for f in fixed:
+                run = fixed_step_runs(f)[0]
+                out.append(Task(("convergence", run.label), benchmark_convergence,
+                                (run, f.fixed_step.option,
+                                 tuple(h * f.fixed_step.step / 1e-3 for h in DEFAULT_STEPS)),
+                                6.0, f"benchmark: {f.label} convergence"))
+        return out
+
+    def assemble(self, plan: Plan, results: dict) -> Assembled:
+        out = Assembled()
+        if not results:   # not run (a --model run)
+            return out
+        man = [self.value(results, ("manoeuvre", n), f"benchmark {n}") for n in MANOEUVRES]
+        terms, failed_terms = (self.value(results, "terms", "benchmark terms")
+                               if "terms" in results else (None, None))
+        conv = {}
+        for key in results:
+            if isinstance(key, tuple) and key[0] == "convergence":
+                v, failed = self.value(results, key, f"benchmark convergence of {key[1]}")
+                if failed is None:
+                    conv[key[1]] = v
+                else:
+                    out.sections.append(failed)
+        broken = [f for _, f in man if f is not None] + ([failed_terms] if failed_terms else [])
+        if broken:
+            out.sections += broken
+            return out
+        settings = {r.label: _settings_line(f) for f in self._runs(plan)
+                    for r in fixed_step_runs(f, plan.quick)}
+        out.sections.append(benchmark_section(plan.tolerances, plan.quick, [v for v, _ in man],
+                                              terms, conv, settings))
+        return out

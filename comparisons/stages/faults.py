@@ -5,47 +5,43 @@ from __future__ import annotations
 from ..judgments.faults import run_fault_suite
 from ..judgments.tolerances import Tolerances
 from .results import Section
+from .stage import Assembled, Plan, Stage
 
 TERM_QUANTITIES = ("mass_matrix", "inverse_dynamics", "gravity", "generalized_forces",
                    "constraint_jacobian", "constraint_bias", "forward_acceleration", "torques",
                    "multipliers")
-FAULT_ENGINES = ("pinocchio", "exudyn", "mujoco", "kane")
-FAULT_LABELS = {"pinocchio": "Pinocchio", "exudyn": "Exudyn's tree", "mujoco": "MuJoCo",
-                "kane": "Kane's engine"}
-FAULT_COST = {"pinocchio": 4.0, "exudyn": 3.0, "mujoco": 1.0, "kane": 2.0}   # s, the pool's order
 
 
 def fault_base(engine: str) -> str:
     """The correct model the faults are injected into: the thesis bicycle, on its disc-contact
-    variant for an engine that models only the disc (Kane's)."""
-    from engines.registry import resolve
-    return "thesis" if "thesis" in getattr(resolve(engine)[0], "contacts", ()) else "thesis-disc"
+    variant for an engine that models only the disc."""
+    from engines.facts import engine_facts
+    return "thesis" if "thesis" in engine_facts(engine).contacts else "thesis-disc"
 
 
 def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None) -> list[dict]:
     """The fault suite against one engine, judged by ``tolerances`` (a stage: worker processes
-    call it). Pinocchio
-    computes every term, so every fault must be detected and localized on it; the Exudyn tree
-    gives only M and the generalized forces, and MuJoCo M, the inverse dynamics and gravity, so
-    a fault confined to D and dD dq (the contact switch) is not observable there (MuJoCo has no
-    forward run on the thesis contact to see it in) and is listed as such, not counted as
-    missed. Kane's engine gives M, the generalized forces, D and dD dq of the disc-contact
-    thesis bicycle: every fault is observable in its terms (the contact switch turns the broken
-    reference's contact into the thesis's)."""
+    call it). Every fault the engine's declared terms can show must be detected and localized
+    on it; a fault confined to terms it does not provide (e.g. the contact switch, which moves
+    only D and dD dq, on an engine that gives M and the forces alone) is not observable there
+    and is listed as such, not counted as missed."""
     from engines import UnsupportedModel
     from reference_model import load_model
+
+    from .runs import label_of
+    label = label_of(engine)   # the report's name of the engine (a spec's class name)
     entries = []
     base = fault_base(engine) if model is None else model
     name = load_model(base).name
     try:
         results = run_fault_suite(engines=(engine,), base=base, tolerances=tolerances)
     except UnsupportedModel as exc:   # the engine cannot represent this bicycle: declared
-        return [{"fault": "-", "engine": engine, "model": name, "detected": None,
+        return [{"fault": "-", "engine": label, "model": name, "detected": None,
                  "localized_to": "-", "expected": "-", "correct": None, "observable": False,
                  "evidence": f"not run on this model: {exc}", "verdict": "not run"}]
     for r in results:
         d = r.to_dict()
-        d["engine"] = engine
+        d["engine"] = label
         d["model"] = name
         d["verdict"] = ("localized" if r.correct else "not observable" if not r.observable
                         else "detected, mislocalized" if r.detected else "missed")
@@ -70,6 +66,39 @@ def fault_section(entries: list[dict]) -> Section:
                 e["localized_to"],
                 e["expected"], e["verdict"], e["evidence"]) for e in entries])
     return sec
+
+
+class FaultsStage(Stage):
+    """The fault suite against every selected engine that declares a term: on the thesis
+    bicycle, or on each ``--model`` whose front contact it models."""
+
+    name, section = "faults", "faults"
+
+    def tasks(self, plan: Plan) -> list:
+        from .pool import Task
+        out = []
+        for f in plan.engines(lambda f: f.has_terms):
+            if not plan.opts.models:
+                out.append(Task((f.spec, None), fault_entries, (plan.tolerances, f.spec),
+                                f.costs.faults, f"fault injection on {f.label}"))
+            for m in plan.opts.models:
+                if m.contact in f.contacts:
+                    out.append(Task((f.spec, m.spec), fault_entries,
+                                    (plan.tolerances, f.spec, m.spec), f.costs.faults,
+                                    f"{m.name}: fault injection on {f.label}"))
+        return out
+
+    def assemble(self, plan: Plan, results: dict) -> Assembled:
+        out = Assembled()
+        for key in results:
+            v, failed = self.value(results, key, f"fault injection on {plan.facts[key[0]].label}")
+            if failed is None:
+                out.faults += v
+            else:
+                out.sections.append(failed)
+        if out.faults:
+            out.sections.append(fault_section(out.faults))
+        return out
 
 
 def localization_lines(tolerances: Tolerances, comparisons, setups: dict,

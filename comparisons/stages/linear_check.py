@@ -19,6 +19,7 @@ from ..judgments.linear_check import LinearCheck, SpeedCheck, linear_benchmark_c
 from ..judgments.tolerances import Tolerances
 from .results import Section, num
 from .stability import SPEED_RANGE
+from .stage import Assembled, Plan, Stage
 
 __all__ = ["ENGINES", "linear_check", "linear_check_section"]
 
@@ -85,3 +86,23 @@ def linear_check_section(check: LinearCheck) -> Section:
     sec.table(("critical speed", "closed form [m/s]", "linearization [m/s]", "difference [m/s]",
                "tolerance", "verdict"), rows)
     return sec
+
+
+class LinearCheckStage(Stage):
+    """Each ``--model``'s linearization against the benchmark's closed form."""
+
+    name, section = "linear-check", None
+
+    def tasks(self, plan: Plan) -> list:
+        from .pool import Task
+        return [Task(m.spec, linear_check, (plan.tolerances, m.spec), 0.1,
+                     f"{m.name}: linearization vs the closed form") for m in plan.opts.models]
+
+    def assemble(self, plan: Plan, results: dict) -> Assembled:
+        out = Assembled()
+        names = {m.spec: m.name for m in plan.opts.models}
+        for key in results:
+            v, failed = self.value(results, key,
+                                   f"{names[key]}: linearization against the closed form")
+            out.sections.append(failed or v)
+        return out

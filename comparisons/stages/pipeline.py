@@ -2,25 +2,21 @@
 
 Stages (each a top-level call, run in worker processes by `pool.run_tasks`, longest first):
 
-* every selected scenario on every engine setup (`runs.run_one`), the reference included;
-* the meaningful horizon of each forward scenario (two reference runs 1e-9 rad/s apart);
-* the engine sections: Pinocchio and Exudyn's tree term by term, Exudyn's trajectories per
-  scenario, its convergence order, the energy drift (`engines`); Kane's equations (disc
-  contact only: on the thesis's scenarios 'not run', with why) and any plugin term by term
-  through `engines.plugin_terms`;
-* the benchmark bicycle: terms, each IFToMM manoeuvre, Exudyn's convergence (`benchmark`);
-* MuJoCo's contact study on thesis-disc: slip, penetration, error against time, refinement
-  against the contact's time constant and the timestep (`mujoco_contact`);
-* the fault-injection suite, per engine (`faults`).
+* every selected scenario on every engine setup (`runs.run_one`), the reference included, and
+  the meaningful horizon of each forward scenario (two reference runs 1e-9 rad/s apart): the
+  pipeline's own core;
+* the stages of `catalog.STAGES`, each one module that says what tasks it needs and how it
+  assembles their results (`stage.Stage`): the stability picture of each ``--model``, every
+  engine term by term, the fixed-step engines' trajectories and convergence order, the energy
+  drift, the soft-contact engines' study, the benchmark bicycle, each model's linearization
+  against the closed form, and fault injection. Which engines each concerns comes from their
+  declared facts (`engines.facts`): no stage names an engine.
 
 With ``--model`` (`Options.models`) the scenarios run as cases bound to each model
-(`cases.build_cases`: what makes sense on another bicycle, and why the rest is not run), each
-disc-contact model gets its stability stages (`stability`: eigenvalues against speed, runs
-below and above each critical speed), and every engine section runs on each model
-(`_model_section_tasks`: terms, faults, Exudyn's convergence, energy, the soft-contact study);
-the thesis's and the benchmark's own sections are the run without --model.
-``--scenario-file`` adds cases to either run.
-Without them the run is exactly the thesis's.
+(`cases.build_cases`: what makes sense on another bicycle, and why the rest is not run), and
+every stage runs on each model; the thesis's and the benchmark's own sections are the run
+without --model. ``--scenario-file`` adds cases to either run. Without them the run is exactly
+the thesis's.
 
 Then, in this process, what depends on them: each scenario's comparisons, the thesis's claims,
 the localization of anything that failed, the summary table. `run_comparison` returns a
@@ -46,16 +42,14 @@ from .. import provenance
 from ..judgments.claims import judge_claims
 from ..judgments.tolerances import Tolerances, load_tolerances
 from ..judgments.summary import summary_table
+from .catalog import SECTIONS as _SECTIONS, STAGES
 from .pool import Task, run_tasks
 from .results import FIGURE_POLICIES, Figure, Section, Text
+from .stage import Plan, failed_section
 
 QUICK = ("check", "zigzag", "check-forward", "stability-psid10")
 #: the parts of a run besides the scenarios, selectable with --sections (all by default)
-SECTIONS = ("terms", "exudyn", "benchmark", "faults", "contact")
-ENGINE_NAMES = ("reference", "pinocchio", "exudyn", "kane", "mujoco")
-#: the engines with term stages of their own; every other engine (kane, mujoco, a plugin) gets
-#: its declared terms through `engines.plugin_terms`
-OWN_TERM_STAGES = ("reference", "pinocchio", "exudyn")
+SECTIONS = _SECTIONS
 
 
 class SelectionError(ValueError):
@@ -114,8 +108,9 @@ def select(scenarios: str | None, quick: bool, engines: str | None) -> Options:
         if n not in SCENARIOS:
             raise SelectionError(f"unknown scenario {n!r} in --scenarios; choose from "
                                  f"{', '.join(SCENARIOS)}")
-    chosen = list(ENGINE_NAMES) if engines is None else [e.strip() for e in engines.split(",")
-                                                         if e.strip()]
+    from engines import default_engines
+    chosen = list(default_engines()) if engines is None else [e.strip() for e in engines.split(",")
+                                                              if e.strip()]
     from engines import EngineNotInstalled, EngineSpecError, available_engines, not_installed
     from engines.registry import resolve
     # the default list: the engines installed; one whose extra is missing is listed, not run
@@ -141,13 +136,16 @@ def select(scenarios: str | None, quick: bool, engines: str | None) -> Options:
 
 # -- environment -------------------------------------------------------------------------------
 
-def _versions() -> dict:
+def _versions(modules=()) -> dict:
+    """The versions of the core's packages and of the modules the engines declare they need
+    (``REQUIRES``): a module's distribution's version, else its ``__version__``."""
     out = {"python": sys.version.split()[0]}
-    for pkg in ("numpy", "scipy", "sympy", "pandas", "matplotlib", "pin", "exudyn", "mujoco"):
+    for pkg in ("numpy", "scipy", "sympy", "pandas", "matplotlib", *modules):
         try:
             out[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
-            out[pkg] = "not installed"
+            mod = sys.modules.get(pkg)
+            out[pkg] = str(getattr(mod, "__version__", "not installed")) if mod else "not installed"
     return out
 
 
@@ -161,146 +159,64 @@ def _cpu() -> str:
     return platform.processor() or platform.machine()
 
 
-def environment(setups, quick: bool = False) -> dict:
+def environment(setups, plan: Plan | None = None) -> dict:
     """What the numbers depend on (no times, no dates: those are in timings.json)."""
     from ..judgments.convergence import REFERENCE_RTOL
-    from .engines import CONVERGENCE_HORIZON, EXUDYN_STEP, convergence_steps
-    from . import mujoco_contact as mc
+    from . import soft_contact as sc
+    from .fixed_step import CONVERGENCE_HORIZON, convergence_steps
+    facts = plan.facts if plan is not None else {}
+    quick = plan.quick if plan is not None else False
     return {
-        "packages": _versions(),
+        "packages": _versions(_distributions(facts.values())),
         "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "arch": platform.machine(),
                     "platform": platform.platform(terse=True)},
         "solvers": {s.label: s.settings for s in setups},
-        "steps": {"exudyn": EXUDYN_STEP, "exudyn_convergence": list(convergence_steps(quick)),
+        "steps": {"fixed_step": {f.name: {"option": f.fixed_step.option, "step": f.fixed_step.step,
+                                          "convergence": list(convergence_steps(quick, f.fixed_step))}
+                                 for f in facts.values() if f.fixed_step is not None},
                   "convergence_horizon_s": CONVERGENCE_HORIZON,
                   "reference_horizon_runs_rtol": REFERENCE_RTOL, "output_grid_s": 0.01,
-                  "mujoco_contact_study": {"scenario": mc.SCENARIO, "model": mc.MODEL,
-                                           "at_time_s": mc.STUDY_TIME,
-                                           "window_s": mc.window(quick)}},
+                  "soft_contact_study": {"scenario": sc.SCENARIO, "model": sc.MODEL,
+                                         "at_time_s": sc.STUDY_TIME, "window_s": sc.window(quick),
+                                         "engines": [f.name for f in facts.values()
+                                                     if f.soft_contact is not None]}},
         "run_times": "timings.json (kept apart: they vary from run to run)",
     }
 
 
+def _distributions(facts) -> tuple[str, ...]:
+    """The top-level modules the engines declare they need, each once."""
+    return tuple(dict.fromkeys(m.split(".")[0] for f in facts for m in f.requires))
+
+
 # -- the stages ----------------------------------------------------------------------------------
 
-def _tasks(opts: Options, labels: list[str], cases, critical: dict) -> list[Task]:
-    from . import benchmark, engines, faults, mujoco_contact, scenarios, stability
-    from .runs import cost, run_one, setups_for
-    setups = {s.label: s for s in setups_for(opts.engines, opts.options_for())}
+def _core_tasks(opts: Options, setups, cases) -> list[Task]:
+    """The scenario runs on every setup and the meaningful horizon of each forward scenario."""
+    from . import scenarios
+    from .runs import cost, run_one
     # the built-in scenarios by name (today's run, unchanged); the others as objects + model
-    tasks = [Task(("run", lab, c.name), run_one,
-                  (setups[lab], c.name) if c.origin == "built-in" and not opts.models
-                  else (setups[lab], c.scenario, c.model),
-                  cost(lab, c.name), f"{c.name} on {lab}")
-             for c in cases for lab in labels]
+    tasks = [Task(("run", s.label, c.name), run_one,
+                  (s, c.name) if c.origin == "built-in" and not opts.models
+                  else (s, c.scenario, c.model),
+                  cost(s, c.name), f"{c.name} on {s.label}")
+             for c in cases for s in setups]
     for c in cases:
         sc = c.scenario
         if sc.kind == "forward" and "trajectory" in sc.compared:
             tasks.append(Task(("horizon", c.name), scenarios.horizon_of,
                               (c.name,) if c.origin == "built-in" and not opts.models
                               else (sc,), 0.3, f"{c.name}: meaningful horizon"))
-    for m in opts.models:
-        if m.spec not in critical:
-            continue
-        tasks.append(Task(("stability-curves", m.spec), stability.stability_curves, (m.spec,),
-                          0.5, f"{m.name}: eigenvalues against speed"))
-        for mode, factor, speed in stability.run_speeds(critical[m.spec]):
-            for lab in labels:
-                if lab in stability.ENGINE_LABELS:
-                    tasks.append(Task(("stability-run", m.spec, mode, speed, lab),
-                                      stability.stability_run, (m.spec, lab, speed),
-                                      0.3 if lab == "reference" else 3.0,
-                                      f"{m.name}: {factor:g} x {mode} speed on {lab}"))
-    for m in opts.models:
-        tasks += _model_section_tasks(opts, m)
-    if opts.models:   # the thesis's and the benchmark's own sections: the run without --model
-        return tasks
-    quick, tols = opts.quick, opts.tolerances
-    want = set(opts.sections)
-    if "pinocchio" in opts.engines and "terms" in want:
-        n = 50 if quick else 200
-        tasks.append(Task("pinocchio-terms", engines.pinocchio_terms, (tols, n), 1.5,
-                          "Pinocchio term by term"))
-    if "faults" in want:
-        for e in faults.FAULT_ENGINES:
-            if e in opts.engines:
-                tasks.append(Task(("faults", e), faults.fault_entries, (tols, e), faults.FAULT_COST[e],
-                                  f"fault injection on {faults.FAULT_LABELS[e]}"))
-    if "exudyn" in opts.engines and "terms" in want:
-        tasks.append(Task("exudyn-terms", engines.exudyn_terms, (tols, 20 if quick else 100), 1.0,
-                          "Exudyn tree term by term"))
-    if "exudyn" in opts.engines and "exudyn" in want:
-        for n in (engines.QUICK_FORWARD if quick else engines.FORWARD):
-            tasks.append(Task(("exudyn-trajectory", n), engines.exudyn_trajectory, (n,),
-                              6.0 if n == "replay" else 2.5, f"Exudyn trajectories: {n}"))
-        tasks.append(Task("exudyn-convergence", engines.exudyn_convergence, (quick,),
-                          5.0 if quick else 8.0, "Exudyn convergence order"))
-        tasks.append(Task("energy", engines.energy_section, (tols,), 2.0, "energy drift"))
-    for spec in opts.engines:
-        if spec not in OWN_TERM_STAGES and "terms" in want:   # kane, mujoco, a plugin
-            tasks.append(Task(("plugin-terms", spec), engines.plugin_terms,
-                              (tols, spec, opts.options_for().get(spec, {}), 50 if quick else 200),
-                              1.5,
-                              f"{spec} term by term"))
-    if "mujoco" in opts.engines and "contact" in want:
-        tasks.append(Task("mujoco-contact", mujoco_contact.mujoco_contact, (quick,),
-                          1.5 if quick else 3.0, "MuJoCo contact study"))
-        stab = tuple(n for n in opts.scenarios if n.startswith("stability-"))
-        if stab and not quick:   # ~2 s of runs: the full report only
-            tasks.append(Task("mujoco-claims", mujoco_contact.claims_on_disc, (stab,),
-                              0.4 * len(stab), "MuJoCo: the stability claims on thesis-disc"))
-    if "pinocchio" in opts.engines and "exudyn" in opts.engines and "benchmark" in want:
-        tasks.append(Task("benchmark-terms", benchmark.benchmark_terms, (tols, quick), 1.5,
-                          "benchmark terms"))
-        for n in benchmark.MANOEUVRES:
-            builds = benchmark.quick_builds(n) if quick else benchmark.BUILDS
-            tasks.append(Task(("benchmark", n), benchmark.benchmark_manoeuvre, (n, builds),
-                              0.5 + 1.5 * len(builds), f"benchmark {n}"))
-        if not quick:
-            tasks.append(Task("benchmark-convergence", benchmark.benchmark_convergence, (), 6.0,
-                              "benchmark: Exudyn convergence"))
     return tasks
 
 
-def _engine_contacts(spec: str) -> tuple[str, ...]:
-    from engines.registry import resolve
-    return tuple(getattr(resolve(spec)[0], "contacts", ()))
-
-
-def _model_section_tasks(opts: Options, m) -> list[Task]:
-    """The engine sections on a user's bicycle ``m`` (a `cases.ModelSpec`): every engine term by
-    term at random states, fault injection on that bicycle, Exudyn's convergence and the energy
-    drift, the soft-contact study (disc contact), each at ``--quick``'s smaller size when asked.
-    An engine that cannot represent the bicycle says so in its section ('not run on this
-    model: <reason>')."""
-    from . import engines, faults, linear_check, mujoco_contact
-    quick, want = opts.quick, set(opts.sections)
-    tols = opts.tolerances
-    tasks = [Task(("linear-check", m.spec), linear_check.linear_check, (tols, m.spec), 0.1,
-                  f"{m.name}: linearization vs the closed form")]
-    if "terms" in want:
-        for spec in opts.engines:
-            if spec != "reference":
-                tasks.append(Task(("model-terms", spec, m.spec), engines.plugin_terms,
-                                  (tols, spec, opts.options_for().get(spec, {}),
-                                   50 if quick else 200, (m.spec,)), 1.0,
-                                  f"{m.name}: {spec} term by term"))
-    if "faults" in want:
-        for e in faults.FAULT_ENGINES:
-            if e in opts.engines and m.contact in _engine_contacts(e):
-                tasks.append(Task(("faults", e, m.spec), faults.fault_entries, (tols, e, m.spec),
-                                  faults.FAULT_COST[e], f"{m.name}: fault injection on "
-                                                        f"{faults.FAULT_LABELS[e]}"))
-    if "exudyn" in opts.engines and "exudyn" in want:
-        tasks.append(Task(("exudyn-convergence", m.spec), engines.exudyn_convergence,
-                          (quick, m.spec), 3.0, f"{m.name}: Exudyn convergence order"))
-        tasks.append(Task(("energy", m.spec), engines.energy_section, (tols, m.spec), 2.0,
-                          f"{m.name}: energy drift"))
-    if "mujoco" in opts.engines and "contact" in want and m.contact == "disc":
-        tasks.append(Task(("mujoco-contact", m.spec), mujoco_contact.mujoco_contact,
-                          (quick, m.spec), 1.5 if quick else 3.0,
-                          f"{m.name}: MuJoCo contact study"))
-    return tasks
+def _stage_tasks(plan: Plan) -> list[Task]:
+    """Every selected stage's tasks, their keys namespaced by the stage's name."""
+    out = []
+    for stage in STAGES:
+        if plan.wants(stage.section):
+            out += [dataclasses.replace(t, key=(stage.name, t.key)) for t in stage.tasks(plan)]
+    return out
 
 
 def _buildable(opts: Options):
@@ -313,8 +229,8 @@ def _buildable(opts: Options):
     dropped = []
     model = load_model("thesis")
     for s in setups:
-        if s.engine in ENGINE_NAMES and not s.options:
-            continue
+        if ":" not in s.engine and not opts.options_for().get(s.engine):
+            continue   # a registered engine at its declared setups: its stages say what fails
         try:
             load_engine(s.engine, model, **dict(s.options))
         except Exception as exc:   # noqa: BLE001 - any failure drops the engine
@@ -322,20 +238,12 @@ def _buildable(opts: Options):
     return setups, dropped
 
 
-def _failed_stage(title: str, error: str) -> Section:
-    sec = Section(title)
-    sec.text(f"**This stage failed**: {error}")
-    sec.comparisons.append({"quantity": "stage", "scenario": title, "model": "-",
-                            "engines": ["-"], "max_error": None, "tolerance": None,
-                            "passed": False, "localized_to": error})
-    return sec
-
-
 def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: None
                    ) -> ComparisonResult:
     """Every stage of the run (module docstring), judged; nothing written."""
-    from . import benchmark, engines, faults, scenarios
+    from engines.facts import engine_facts
 
+    from . import faults, scenarios
     from .cases import build_cases
     from .stability import applies, critical as critical_speeds
 
@@ -360,17 +268,15 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
     cases = {c.name: c.scenario for c in case_list}
     names = list(cases)
     critical = {m.spec: critical_speeds(m.spec) for m in opts.models if applies(m.contact) is None}
-    tasks = _tasks(opts, labels, case_list, critical)
+    plan = Plan(opts, tuple(setups), {spec: engine_facts(spec) for spec in opts.engines},
+                tuple(case_list), critical)
+    tasks = _core_tasks(opts, setups, case_list) + _stage_tasks(plan)
     progress(f"{len(tasks)} stages on {opts.workers or 'all'} worker(s): "
              f"{len(names)} scenario(s) on {', '.join(labels)}"
              + (", engine sections, faults ..." if not opts.models else
                 f", the stability of {len(critical)} model(s) ..."))
     done = run_tasks(tasks, opts.workers, progress)
     timings = {"stages": {t.label: round(done[t.key].seconds, 3) for t in tasks}}
-
-    def value(key, title):
-        r = done[key]
-        return (r.value, None) if r.error is None else (None, _failed_stage(title, r.error))
 
     runs = {}
     for n in names:
@@ -379,8 +285,8 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
             runs[(lab, n)] = r.value if r.error is None else Run(
                 lab, n, "-", "-", "failed", r.error, 0.0)
     t0 = time.perf_counter()
-    horizons = {key[1]: r.value for key, r in done.items()
-                if isinstance(key, tuple) and key[0] == "horizon" and r.error is None}
+    horizons = {c.name: done[("horizon", c.name)].value for c in case_list
+                if ("horizon", c.name) in done and done[("horizon", c.name)].error is None}
     rows, checks, corrections = scenarios.reference_rows(names, runs, cases)
     from reference_model import load_model
     by_label = {s.label: s for s in setups}
@@ -392,65 +298,21 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                           opts.scenarios if not opts.models else thesis_names)
     if opts.models:
         sections.insert(0, _models_section(opts, not_run))
-        sections += _stability_sections(opts, critical, done)
-
-    def add(key, title, build=lambda v: v):
-        if key in done:
-            v, failed = value(key, title)
-            sections.append(failed or build(v))
-
-    add("pinocchio-terms", "Reference vs Pinocchio, term by term")
-    for spec in opts.engines:
-        add(("plugin-terms", spec), f"Reference vs {spec}, term by term")
-    add("exudyn-terms", "Reference vs Exudyn kinematic tree, term by term")
-    traj_keys = [k for k in done if isinstance(k, tuple) and k[0] == "exudyn-trajectory"]
-    if traj_keys:
-        parts, failures = [], []
-        for k in traj_keys:
-            v, failed = value(k, f"Exudyn trajectories: {k[1]}")
-            (parts.append(v) if failed is None else failures.append(failed))
-        sections.append(engines.merge_trajectories(parts))
-        sections += failures
-    add("exudyn-convergence", "Exudyn convergence")
-    add("energy", "Energy drift")
-    add("mujoco-contact", "MuJoCo contact study")
-    if "mujoco-claims" in done:
-        from .mujoco_contact import merge_claims
-        disc_claims, failed_claims = value("mujoco-claims", "MuJoCo claims on thesis-disc")
-        if failed_claims is None:
-            claims = merge_claims(claims, disc_claims)
-        sections.append(failed_claims or disc_claims.section)
-    if "benchmark-terms" in done:
-        bench_runs = [value(("benchmark", n), f"benchmark {n}") for n in benchmark.MANOEUVRES]
-        terms, failed_terms = value("benchmark-terms", "benchmark terms")
-        conv = value("benchmark-convergence", "benchmark convergence")[0] \
-            if "benchmark-convergence" in done else None
-        broken = [f for _, f in bench_runs if f is not None] + ([failed_terms] if failed_terms else [])
-        if broken:
-            sections += broken
-        else:
-            sections.append(benchmark.benchmark_section(opts.tolerances, opts.quick,
-                                                        [v for v, _ in bench_runs],
-                                                        terms, conv))
-    for m in opts.models:
-        add(("linear-check", m.spec), f"{m.name}: linearization against the closed form")
-        for spec in opts.engines:
-            add(("model-terms", spec, m.spec), f"{m.name}: reference vs {spec}, term by term")
-        add(("exudyn-convergence", m.spec), f"{m.name}: Exudyn convergence")
-        add(("energy", m.spec), f"{m.name}: energy drift")
-        add(("mujoco-contact", m.spec), f"{m.name}: MuJoCo contact study")
     fault_rows = []
-    fault_keys = [("faults", e) for e in faults.FAULT_ENGINES] + [
-        ("faults", e, m.spec) for m in opts.models for e in faults.FAULT_ENGINES]
-    for key in fault_keys:
-        if key in done:
-            v, failed = value(key, f"fault injection on {key[1]}")
-            if failed is None:
-                fault_rows += v
-            else:
-                sections.append(failed)
-    if fault_rows:
-        sections.append(faults.fault_section(fault_rows))
+    for stage in STAGES:   # each stage's results, keyed as it gave them, in task order
+        mine = {t.key[1]: done[t.key] for t in tasks
+                if isinstance(t.key, tuple) and len(t.key) == 2 and t.key[0] == stage.name}
+        if not plan.wants(stage.section):
+            continue
+        try:
+            part = stage.assemble(plan, mine)
+            claims = stage.revise_claims(plan, mine, claims)
+        except Exception as exc:   # noqa: BLE001 - one stage's assembly fails alone
+            sections.append(failed_section(f"{stage.name}: assembling its section",
+                                           f"{type(exc).__name__}: {' '.join(str(exc).split())[:300]}"))
+            continue
+        sections += part.sections
+        fault_rows += part.faults
 
     comparisons = [c for s in sections for c in s.comparisons]
     sections = [apply_figure_policy(sec, opts.figure_policy) for sec in sections]
@@ -478,7 +340,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "checks": checks,
         "initial_corrections": corrections,
         "expected_differences": _expected_differences(names, cases),
-        "environment": environment(setups, opts.quick),
+        "environment": environment(setups, plan),
         "provenance": provenance.record(comparisons, runs.values()),
         "quick": opts.quick,
         "figures": opts.figure_policy,
@@ -551,8 +413,8 @@ def _models_section(opts: Options, not_run) -> Section:
              "of zigzag and check, fed forward. The thesis's claims are about the thesis "
              "bicycle: they are judged only on the thesis's scenarios (model `thesis`). Every "
              "engine section runs on each model: every engine term by term at random states, "
-             "fault injection on that bicycle, Exudyn's convergence order and the energy "
-             "drift, the soft-contact study, the eigenvalues with runs at its own critical "
+             "fault injection on that bicycle, the fixed-step engines' convergence order, "
+             "the energy drift, the soft-contact engines' study, the eigenvalues with runs at its own critical "
              "speeds and the linearization against the benchmark's closed form (disc "
              "contact). An engine that cannot represent a model says so ('not run on this "
              "model', with the reason): a declared limitation, not a failure.")
@@ -560,27 +422,3 @@ def _models_section(opts: Options, not_run) -> Section:
         sec.table(("scenario", "model", "not run because"),
                   [(r.scenario, r.model, r.reason) for r in not_run])
     return sec
-
-
-def _stability_sections(opts: Options, critical: dict, done: dict) -> list[Section]:
-    from .stability import applies, stability_section
-    out = []
-    for m in opts.models:
-        why = applies(m.contact)
-        if why is not None:
-            sec = Section(f"Stability of {m.name} ({m.source})")
-            sec.text(f"Not computed: {why}.")
-            out.append(sec)
-            continue
-        curves_r = done[("stability-curves", m.spec)]
-        runs, errors = {}, {}
-        for key, r in done.items():
-            if isinstance(key, tuple) and key[0] == "stability-run" and key[1] == m.spec:
-                if r.error is None:
-                    runs[key[2:]] = r.value
-                else:
-                    errors[key[2:]] = r.error
-        out.append(stability_section(m, critical[m.spec],
-                                     curves_r.value if curves_r.error is None else None,
-                                     runs, errors))
-    return out

@@ -1,21 +1,16 @@
 """Every scenario on every engine that can run it, the thesis's way.
 
-An *engine setup* is an engine with its options, labelled as the report names it:
+An *engine setup* is an engine with its options, labelled as the report names it. Each engine
+declares its setups itself (`engines.facts.RunSetup`: a label suffix, options, the kinds of
+scenario it runs and its settings in a line; `bicycle-xval engines` lists them); an engine that
+declares none has one, labelled by its name, at its defaults. Options given on the command line
+(``--engine-option``) replace the declared ones. The kinds of scenario a setup runs follow the
+engine's capabilities unless it declares them: forward through ``simulate``, inverse through a
+``run_inverse(scenario)`` method (the reference runs both itself).
 
-| label        | engine     | runs                                                                |
-|--------------|------------|---------------------------------------------------------------------|
-| reference    | reference  | inverse (13x13 inverse dynamics) and forward (DOP853, the scenario's |
-|              |            | constraint handling: Baumgarte a1 = a2 = 10 as the thesis)          |
-| pinocchio    | pinocchio  | the same solvers on Pinocchio's M, RNEA and contact kinematics       |
-| exudyn-tree  | exudyn     | forward only: kinematic tree, generalized-alpha, h = 1e-3 s, the     |
-|              |            | model's own front contact (user constraints for the thesis contact) |
-| mujoco       | mujoco     | forward only, disc-contact models: MuJoCo's soft contact, h = 1e-4 s;  |
-|              |            | 'not run' on the thesis contact (a declared model difference)        |
-| kane         | kane       | forward only: Kane's equations of Moore's Whipple bicycle in the     |
-|              |            | reference's solvers; disc contact only (else 'not run', with why)   |
-
-`run_one` is a top-level function of (label, scenario, model spec), so the pipeline farms runs out to
-worker processes: the report's numbers do not depend on the order or the process they ran in.
+`run_one` is a top-level function of (setup, scenario, model spec), so the pipeline farms runs
+out to worker processes: the report's numbers do not depend on the order or the process they
+ran in.
 """
 
 from __future__ import annotations
@@ -23,9 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from engines.runs import Run, run_scenario
-from reference_model.export_mjcf import MjcfSettings
-
-EXUDYN_STEP = 1e-3
 
 
 @dataclass(frozen=True)
@@ -43,66 +35,46 @@ class EngineSetup:
         return load_engine(self.engine, model, **dict(self.options))
 
 
-SETUPS: dict[str, EngineSetup] = {s.label: s for s in (
-    EngineSetup("reference", "reference",
-                settings="inverse: inverse kinematics DOP853 rtol 1e-12 + 13x13 LU; forward: "
-                         "DOP853 rtol 1e-10, atol 1e-12, the scenario's constraint handling "
-                         "(Baumgarte a1 = a2 = 10)"),
-    EngineSetup("pinocchio", "pinocchio",
-                settings="the reference's solvers on Pinocchio's crba, rnea and frame kinematics "
-                         "(same integrator and tolerances)"),
-    EngineSetup("exudyn-tree", "exudyn", (("build", "tree"), ("step", EXUDYN_STEP)),
-                kinds=("forward",),
-                settings=f"ObjectKinematicTree, generalized-alpha (spectral radius 0.9, index 3), "
-                         f"h = {EXUDYN_STEP:g} s, Newton tolerance 1e-10; no inverse dynamics"),
-    EngineSetup("kane", "kane", kinds=("forward",),
-                settings="Moore's Whipple bicycle by Kane's method (sympy KanesMethod, generated "
-                         "code, dependent speeds eliminated per state) in the reference's solvers "
-                         "(same integrator and tolerances); disc front contact only; no inverse "
-                         "dynamics"),
-)}
-_MJ = MjcfSettings()
-SETUPS["mujoco"] = EngineSetup(
-    "mujoco", "mujoco", kinds=("forward",),
-    settings=f"MuJoCo's own soft wheel-ground contact (disc-contact models only): cylinders on "
-             f"a plane, {_MJ.cone} cone, condim {_MJ.condim}, solref "
-             f"({_MJ.solref[0]:g} s, {_MJ.solref[1]:g}), timestep {_MJ.timestep:g} s, "
-             f"{_MJ.integrator}: the contact study's closest to ideal rolling; no inverse dynamics")
-ENGINE_SETUPS = {"reference": ("reference",), "pinocchio": ("pinocchio",),
-                 "exudyn": ("exudyn-tree",), "mujoco": ("mujoco",), "kane": ("kane",)}
-
-
 def label_of(spec: str) -> str:
     """The report's label of an engine spec: its name, or the class name of a
     ``module:Class`` / ``file.py:Class`` spec."""
     return spec.rsplit(":", 1)[-1] if ":" in spec else spec
 
 
-def plugin_setup(spec: str, options: dict | None = None) -> EngineSetup:
-    """The setup of an engine that is not a built-in: its declared capabilities say which
-    scenarios it runs (inverse through a ``run_inverse(scenario)`` method, forward through
-    ``simulate``)."""
-    from engines.registry import resolve
-    cls = resolve(spec)[0]
-    kinds = tuple(k for k, ok in (("inverse", callable(getattr(cls, "run_inverse", None))),
-                                  ("forward", "simulate" in getattr(cls, "capabilities", ())))
-                  if ok)
-    opts = tuple(sorted((options or {}).items()))
-    return EngineSetup(label_of(spec), spec, opts, kinds,
-                       settings=f"{spec} with its own defaults"
-                                + (f" and {', '.join(f'{k} = {v}' for k, v in opts)}" if opts else ""))
+def _kinds(facts, declared) -> tuple[str, ...]:
+    if declared is not None:
+        return tuple(declared)
+    if facts.name == "reference":
+        return ("inverse", "forward")
+    return tuple(k for k, ok in (("inverse", facts.has_inverse_runs),
+                                 ("forward", "simulate" in facts.capabilities)) if ok)
+
+
+def engine_setups(spec: str, options: dict | None = None) -> list[EngineSetup]:
+    """The setups of one engine (name or spec): those it declares, or, with ``options`` from
+    the command line, one setup labelled by its name with those options."""
+    from engines.facts import engine_facts
+    facts = engine_facts(spec)
+    label = label_of(spec)
+    if options:
+        opts = tuple(sorted(options.items()))
+        kinds = _kinds(facts, facts.run_setups[0].kinds if len(facts.run_setups) == 1 else None)
+        return [EngineSetup(label, spec, opts, kinds,
+                            settings=f"{spec} with {', '.join(f'{k} = {v}' for k, v in opts)}")]
+    return [EngineSetup(label if not s.suffix else f"{label}-{s.suffix}", spec, s.options,
+                        _kinds(facts, s.kinds), s.settings or f"{spec} with its own defaults")
+            for s in facts.run_setups]
 
 
 def setups_for(engines, options: dict | None = None) -> list[EngineSetup]:
-    """The setups of the selected engines (names or specs), reference first; ``options``:
-    spec -> keyword options for engines that are not built-ins."""
-    out = []
-    for e in engines:
-        if e in ENGINE_SETUPS and not (options or {}).get(e):
-            out += [SETUPS[lab] for lab in ENGINE_SETUPS[e]]
-        else:
-            out.append(plugin_setup(e, (options or {}).get(e)))
-    return out
+    """The setups of the selected engines (names or specs), in the given order (the reference
+    first); ``options``: spec -> keyword options from the command line."""
+    return [s for e in engines for s in engine_setups(e, (options or {}).get(e))]
+
+
+def setup_of(spec: str, options: dict | None = None) -> EngineSetup:
+    """An engine's first setup (the one its runs appear under when it declares several)."""
+    return engine_setups(spec, options)[0]
 
 
 def run_one(setup: EngineSetup, scenario, model: str | None = None) -> Run:
@@ -148,12 +120,12 @@ def _contact_reason(cls, setup: EngineSetup, model) -> str:
             f"{model.contact!r} of model {model.name!r}")
 
 
-def cost(label: str, scenario: str) -> float:
-    """A rough run time for scheduling (s), measured on the 2-core machine."""
+def cost(setup: EngineSetup, scenario: str) -> float:
+    """A rough run time for scheduling (s), from the engine's declared `engines.facts.Costs`."""
+    from engines.facts import engine_facts
+    c = engine_facts(setup.engine).costs
     scenario = scenario.split("-on-")[0]
     if scenario in ("check", "zigzag"):
-        return 0.1 if label == "reference" else 0.8
-    per_second = {"reference": 0.05, "pinocchio": 0.6, "exudyn-tree": 0.6, "mujoco": 0.35,
-                  "kane": 0.3}.get(label, 1.0)
+        return c.short_run
     length = 6.3 if scenario in ("replay", "check-forward") else 1.2
-    return per_second * length
+    return c.run_per_second * length

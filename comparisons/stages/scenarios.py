@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from engines.facts import engine_facts
 from engines.runs import Run
 from reference_model import CONSTRAINT_NAMES, load_model
 from reference_model.scenarios import get_scenario
@@ -88,8 +89,7 @@ def _build_if_it_models(setup, model, failures: list[dict]):
 def run_difference(setup) -> str | None:
     """The model difference the setup's engine declares for its forward runs (a soft contact),
     or None (`engines.base.Engine.run_difference`)."""
-    from engines.registry import resolve
-    return getattr(resolve(setup.engine)[0], "run_difference", None)
+    return engine_facts(setup.engine).run_difference
 
 
 def _scenario(name: str, cases: dict | None):
@@ -164,9 +164,9 @@ def compare_scenarios(tolerances: Tolerances, names, setups: dict, runs: dict, h
                 te = trajectory_error(ref, r, hor.t)
                 errors[lab] = (te.t, te.errors.max(axis=1) if te.t.size else te.t)
                 continue
-            judged = ("auto" if setups[lab].engine in ("pinocchio", "exudyn", "kane")
-                      else "trajectory_conformance")
-            c, te = compare_forward(model, ref, r, hor, tols, judged_by=judged)
+            facts = engine_facts(setups[lab].engine)   # how the engine says its runs are judged
+            c, te = compare_forward(model, ref, r, hor, tols, judged_by=facts.trajectory_tolerance,
+                                    reported_because=facts.trajectory_judged_by or "a study")
             comps += c
             errors[lab] = (te.t, te.errors.max(axis=1) if te.t.size else te.t)
         figures.figure(f"{name}_trajectories.png", "trajectory_overlay", scenario=name, runs=here,

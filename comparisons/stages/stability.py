@@ -4,8 +4,8 @@ above each critical speed on every engine that can simulate, showing the predict
 decay.
 
     curves = stability_curves(spec)                    # a stage: the eigenvalue figure's data
-    traj = stability_run(spec, "pinocchio", 4.6)       # a stage: one forward run
-    section = stability_section(model, critical, curves, runs)   # main process
+    traj = stability_run(spec, setup, 4.6)             # a stage: one forward run
+    section = stability_section(model, critical, curves, runs, errors, labels)
 
 Which models: front contact "disc" (the benchmark's knife-edge wheel, for which the
 linearization about upright straight running is Meijaard et al.'s). A model with drag (cv > 0)
@@ -40,13 +40,21 @@ from reference_model.scenarios import Scenario
 
 from ..judgments.benchmark import _cx, _pick, identify_eigenvalues, roll_rate_envelope
 from .results import Section
+from .stage import Assembled, Plan, Stage
 
 SPEED_RANGE = (0.0, 10.0)      # m/s: where critical speeds are looked for
 SPEED_STEP = 0.01              # m/s: the figure's grid
 FACTORS = (0.9, 1.1)           # runs below and above each critical speed
 ROLL_RATE = 0.05               # rad/s: the IFToMM kick
 GRID = (0.0, 0.01, 501)        # 0:0.01:5 s
-ENGINE_LABELS = ("reference", "pinocchio", "exudyn-tree")   # the setups that simulate
+
+
+def simulating(setup) -> bool:
+    """Whether a setup's runs go into the stability picture: it runs forward scenarios and
+    declares no model difference of its runs (a soft contact's runs are that difference's
+    study, not a prediction's test)."""
+    from engines.facts import engine_facts
+    return "forward" in setup.kinds and engine_facts(setup.engine).run_difference is None
 
 
 def stability_model(spec: str) -> tuple[Model, str]:
@@ -100,11 +108,11 @@ def stability_curves(spec: str) -> dict:
     return eigenvalue_curves(model, grid)
 
 
-def stability_run(spec: str, label: str, speed: float):
-    """One forward run at ``speed`` on the engine setup ``label`` (a stage): the Trajectory."""
-    from .runs import SETUPS
+def stability_run(spec: str, setup, speed: float):
+    """One forward run at ``speed`` on the engine setup ``setup`` (a `runs.EngineSetup`; a
+    stage): the Trajectory."""
     model, _ = stability_model(spec)
-    return SETUPS[label].build(model).simulate(scenario(spec, speed))
+    return setup.build(model).simulate(scenario(spec, speed))
 
 
 def judge_run(model: Model, mode: str, speed: float, traj) -> dict:
@@ -132,9 +140,12 @@ def judge_run(model: Model, mode: str, speed: float, traj) -> dict:
 
 
 def stability_section(m, crit: dict[str, float], curves: dict | None,
-                      runs: dict[tuple[str, float, str], object], errors: dict) -> Section:
+                      runs: dict[tuple[str, float, str], object], errors: dict,
+                      labels: tuple[str, ...] = ()) -> Section:
     """The section of one model (``m`` a `cases.ModelSpec`): the eigenvalue figure, the critical
-    speeds, the runs' table and figure; every run judged (module docstring)."""
+    speeds, the runs' table and figure; every run judged (module docstring). ``labels``: the
+    setups' order in the tables (default: as the runs come)."""
+    labels = tuple(labels) or tuple(dict.fromkeys(k[2] for k in (*runs, *errors)))
     sec = Section(f"Stability of {m.name} ({m.source})")
     model, note = stability_model(m.spec)
     sec.text(
@@ -159,7 +170,7 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
         lines = {}
         # in the engines' fixed order, not the order the pool finished them (identical inputs,
         # identical report)
-        for label in [lab for lab in ENGINE_LABELS if (mode, speed, lab) in runs]:
+        for label in [lab for lab in labels if (mode, speed, lab) in runs]:
             traj = runs[(mode, speed, label)]
             lines[label] = (traj.t, traj.q[:, 3])
             j = judge_run(model, mode, speed, traj)
@@ -173,7 +184,7 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
                 "passed": j["passed"], "measured": j["measured"], "predicted": j["expected"],
                 "linear": j["predicted"], "localized_to": f"measured {j['measured']:+.4f} /s",
                 "note": j["how"]})
-        for label in [lab for lab in ENGINE_LABELS if (mode, speed, lab) in errors]:
+        for label in [lab for lab in labels if (mode, speed, lab) in errors]:
             err = errors[(mode, speed, label)]
             rows.append((mode, f"{factor:g} x = {speed:.4f}", label, "-", "-", "-", "FAIL", err))
             sec.comparisons.append({
@@ -192,3 +203,50 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
 def _slug(name: str) -> str:
     from .cases import slug
     return slug(name)
+
+
+class StabilityStage(Stage):
+    """Each disc-contact ``--model``'s stability picture: its eigenvalues against speed, and
+    runs below and above each critical speed on every setup that simulates (`simulating`)."""
+
+    name, section = "stability", None
+
+    def tasks(self, plan: Plan) -> list:
+        from .pool import Task
+        out = []
+        for m in plan.opts.models:
+            if m.spec not in plan.critical:
+                continue
+            out.append(Task(("curves", m.spec), stability_curves, (m.spec,), 0.5,
+                            f"{m.name}: eigenvalues against speed"))
+            for mode, factor, speed in run_speeds(plan.critical[m.spec]):
+                for s in plan.setups:
+                    if simulating(s):
+                        cost = 5.0 * plan.facts[s.engine].costs.run_per_second
+                        out.append(Task(("run", m.spec, mode, speed, s.label), stability_run,
+                                        (m.spec, s, speed), cost,
+                                        f"{m.name}: {factor:g} x {mode} speed on {s.label}"))
+        return out
+
+    def assemble(self, plan: Plan, results: dict) -> Assembled:
+        out = Assembled()
+        labels = tuple(s.label for s in plan.setups if simulating(s))
+        for m in plan.opts.models:
+            why = applies(m.contact)
+            if why is not None:
+                sec = Section(f"Stability of {m.name} ({m.source})")
+                sec.text(f"Not computed: {why}.")
+                out.sections.append(sec)
+                continue
+            curves = results[("curves", m.spec)]
+            runs, errors = {}, {}
+            for key, r in results.items():
+                if key[0] == "run" and key[1] == m.spec:
+                    if r.error is None:
+                        runs[key[2:]] = r.value
+                    else:
+                        errors[key[2:]] = r.error
+            out.sections.append(stability_section(m, plan.critical[m.spec],
+                                                  curves.value if curves.error is None else None,
+                                                  runs, errors, labels))
+        return out

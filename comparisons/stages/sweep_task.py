@@ -95,22 +95,22 @@ def _factors():
     return FACTORS
 
 
-def run_options(spec: SweepSpec) -> dict[str, tuple[str, dict]]:
-    """label -> (engine spec, options) of the forward runs: the reference, then every engine
-    of the spec whose facts declare a forward run setup (the first, with its options) on the
-    spec's front contact and no model difference of its runs (a soft contact's runs are not
-    judged against ideal rolling's prediction)."""
+def run_options(spec: SweepSpec) -> dict:
+    """label -> `runs.EngineSetup` of the forward runs: the reference's, then, for every engine
+    of the spec that models the spec's front contact, its first setup that goes into the
+    stability picture (`stability.simulating`: it runs forward scenarios and declares no model
+    difference; a soft contact's runs are not judged against ideal rolling's prediction)."""
     from engines.defaults import REFERENCE
-    from engines.facts import engine_facts, options_dict
-    out = {REFERENCE: (REFERENCE, {})}
-    for e in spec.engines:
-        facts = engine_facts(e)
-        if facts.name == REFERENCE or facts.run_difference or spec.contact not in facts.contacts:
+    from engines.facts import engine_facts
+    from .runs import engine_setups
+    from .stability import simulating
+    out = {}
+    for e in (REFERENCE, *(e for e in spec.engines if e != REFERENCE)):
+        if spec.contact not in engine_facts(e).contacts:
             continue
-        setup = next((s for s in facts.run_setups if "forward" in (s.kinds or (
-            ("forward",) if "simulate" in facts.capabilities else ()))), None)
+        setup = next((s for s in engine_setups(e) if simulating(s)), None)
         if setup is not None:
-            out[label_of(e)] = (e, options_dict(setup.options))
+            out[label_of(e)] = setup
     return out
 
 
@@ -242,15 +242,14 @@ def _explanation(model, states, engines, tolerances) -> str:
 def _runs(spec: SweepSpec, model, crit: dict[str, float], row: dict, failures: list[str]) -> bool:
     """Forward runs below and above each critical speed on the engines of `run_options` (the
     scenario and judgment of `stages.stability`); True when none contradicts the prediction."""
-    from engines import load_engine
     from .stability import judge_run, run_speeds
     ok, engines = True, run_options(spec)
     for mode, factor, speed in run_speeds(crit):
         scenario = _scenario(model, speed)
-        for e, (name, options) in engines.items():
+        for e, setup in engines.items():
             col = f"run.{mode}.{factor:g}.{e}"
             try:
-                engine = load_engine(name, model, **options)
+                engine = setup.build(model)
                 traj = engine.simulate(scenario)
                 j = judge_run(model, mode, speed, traj)
             except Exception as exc:  # noqa: BLE001

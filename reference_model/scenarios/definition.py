@@ -39,7 +39,7 @@ class ExpectedDifference:
     quantity stops differing, the harness reports that as unexpected too."""
 
     quantity: str        # e.g. "convergence order"
-    engines: str         # e.g. "exudyn-tree (disc contact) vs reference (thesis contact)"
+    engines: str         # e.g. "an engine with the disc contact vs the reference with the thesis contact"
     expected: str        # the verdict expected, e.g. "model difference"
     reason: str
 
