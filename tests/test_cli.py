@@ -118,6 +118,16 @@ USAGE_ERRORS = {
                                          ["--out"]),
     "bad parameter file": (["simulate", "--model", "{bad}", "--scenario", "replay", "--out",
                             "{out}"], ["m3", "negative_mass.toml"]),
+    # --build and --step are a fixed-step integrator's (engines.facts.FixedStep), worded from the
+    # engine's facts: the reference declares none, Exudyn's variants are its two builds
+    "--build without a fixed-step integrator": (
+        ["simulate", "--scenario", "replay", "--build", "tree", "--out", "{out}"],
+        ["--build and --step", "fixed-step integrator", "'reference' declares none"]),
+    "--step without a fixed-step integrator": (
+        ["simulate", "--scenario", "replay", "--step", "1e-3", "--out", "{out}"],
+        ["fixed-step integrator", "'reference' declares none"]),
+    "unknown --build": (["simulate", "--engine", "exudyn", "--scenario", "replay", "--build",
+                         "nope", "--out", "{out}"], ["--build nope", "tree, redundant"]),
     "unknown subcommand": (["frobnicate"], ["frobnicate"]),
     "unknown scenario in run": (["run", "--scenarios", "check,no-such-scenario", "--out",
                                  "{dir}"], ["no-such-scenario"]),
@@ -137,6 +147,28 @@ def test_usage_errors_exit_2_with_one_line(tmp_path, capsys, case):
         assert word in line, (word, line)
     assert stdout == ""
     assert not (tmp_path / "out.csv").exists()   # nothing written on a usage error
+
+
+def test_build_and_step_are_the_fixed_step_integrator_s_options():
+    """``--build V --step h`` become the engine's declared variant's options and its step
+    option (docs/engines.md: Exudyn's build='redundant', step=h). Planted: the step passed
+    under any other name than the declared option fails."""
+    import argparse
+
+    from comparisons.cli.main import _fixed_step_options
+    from engines.facts import engine_facts
+    fixed = engine_facts("exudyn").fixed_step
+    args = argparse.Namespace(engine="exudyn", build="redundant", step=2e-3)
+    assert _fixed_step_options(args, fixed) == {"build": "redundant", "step": 2e-3}
+    assert _fixed_step_options(argparse.Namespace(engine="x", build=None, step=None), None) == {}
+
+
+def test_run_sections_help_lists_the_pipeline_s_sections():
+    from comparisons.cli.main import build_parser
+    from comparisons.stages.pipeline import SECTIONS
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices["run"]
+    help_text = " ".join(sub.format_help().split())
+    assert ", ".join(SECTIONS) in help_text
 
 
 # --------------------------------------------------------------------------------------------

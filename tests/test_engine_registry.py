@@ -79,7 +79,6 @@ def third_party(tmp_path, monkeypatch):
 
 def test_builtins_are_discovered_in_declaration_order():
     assert available_engines()[:3] == BUILTINS
-    assert engines.ENGINES == BUILTINS
 
 
 def test_builtins_come_from_the_pyproject_declaration():
@@ -290,3 +289,45 @@ def test_split_options_by_a_method_s_signature():
     assert split_options(simulate, {"fall_limit": 0.4, "rtol": 1e-9}) == ({"fall_limit": 0.4},
                                                                          {"rtol": 1e-9})
     assert split_options(anything, {"rtol": 1e-9}) == ({"rtol": 1e-9}, {})
+
+
+# -- the default engine lists, from the registry and the engines' facts ---------------------
+
+def test_default_engines_are_the_installed_ones_with_terms_third_parties_included(third_party):
+    """`engines.defaults`: a third party's engine is a default like a built-in. The fake's
+    declarations decide: 'fake' has M and models the thesis contact only, 'boom' declares no
+    capability, 'ghost' does not import; Kane's engine models the disc contact only
+    (docs/engines.md). Planted: without the contact filter, 'fake' is a disc default and 'kane'
+    a thesis one; without the terms filter, 'boom' is one: both fail here."""
+    from engines import installed_engines, term_engines
+    thesis, disc = term_engines("thesis"), term_engines("disc")
+    assert "fake" in thesis and "fake" not in disc
+    assert "kane" in disc and "kane" not in thesis
+    assert "boom" in installed_engines() and "boom" not in term_engines()
+    assert "ghost" not in installed_engines()
+    assert "reference" in installed_engines() and "reference" not in term_engines()
+    assert installed_engines()[:3] == BUILTINS              # the registry's order
+
+
+def test_conformance_and_warm_imports_cover_a_third_party(third_party, tmp_path, monkeypatch):
+    """The conformance suite's default list and the workers' warm imports come from the
+    registry: the fake distribution's engines are in both (a broken one too: the suite's
+    header says why it was not checked). ``warm_imports`` imports what a module declares in
+    ``REQUIRES`` and skips what is not installed. Planted: warming without the ``REQUIRES``
+    step leaves the declared library unimported and fails."""
+    import sys
+
+    from comparisons.conformance.plugin import default_engines
+    from comparisons.stages.pool import engine_imports, warm_imports
+    assert {"fake", "boom", "ghost"} <= set(default_engines())
+    assert "reference" not in default_engines()
+    assert "fake_engine_mod" in engine_imports() and "no_such_module_xyz" in engine_imports()
+    assert engine_imports()[0] == "engines.reference"
+    (tmp_path / "warm_probe_engine.py").write_text(
+        "REQUIRES = ('warm_probe_library', 'warm_probe_absent')\n")
+    (tmp_path / "warm_probe_library.py").write_text("")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for name in ("warm_probe_engine", "warm_probe_library"):
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    warm_imports(("warm_probe_engine", "no_such_module_xyz"))
+    assert "warm_probe_library" in sys.modules and "warm_probe_absent" not in sys.modules

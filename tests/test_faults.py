@@ -133,7 +133,7 @@ def test_a_fault_the_terms_cannot_show_is_caught_in_the_forward_run(thesis):
 
 def test_fault_suite_rejects_unknown_faults():
     with pytest.raises(ValueError, match="unknown fault 'I3xz'.*I3xz-sign"):
-        run_fault_suite(faults=["I3xz"], tolerances=TOLS)
+        run_fault_suite(("pinocchio",), faults=["I3xz"], tolerances=TOLS)
 
 
 # -- the gyroscopic fault variant of the derivation ----------------------------------------------
@@ -199,7 +199,7 @@ def _args(file, **kw):
 
 
 def test_diagnose_thesis_against_itself_agrees(capsys):
-    d = diagnose(THESIS_FILE, n_states=8, tolerances=TOLS)
+    d = diagnose(THESIS_FILE, engines=("pinocchio",), n_states=8, tolerances=TOLS)
     assert d.agrees and d.declared == () and d.localization.explanation is None
     assert run_diagnose(_args(THESIS_FILE)) == 0
     out = capsys.readouterr().out
@@ -228,7 +228,7 @@ def test_diagnose_localizes_a_flipped_I3xz(tmp_path, capsys):
     data = json.loads(out_json.read_text())
     assert data["agrees"] is False and data["localized_to"] == "M, Qv via I3xz (body 3 frame+rider)"
     # against itself, the same broken file is consistent: engines and adapters agree
-    assert diagnose(bad, n_states=8, tolerances=TOLS).agrees
+    assert diagnose(bad, engines=("pinocchio",), n_states=8, tolerances=TOLS).agrees
 
 
 def test_diagnose_with_kanes_equations_on_a_disc_bicycle(tmp_path, capsys):
@@ -251,8 +251,23 @@ def test_diagnose_with_kanes_equations_on_a_disc_bicycle(tmp_path, capsys):
         run_diagnose(_args(THESIS_FILE, engines="kane"))
 
 
+def test_diagnose_defaults_to_the_installed_engines_with_terms_on_the_contact():
+    """Without --engine(s), diagnose checks every installed engine with terms that models the
+    front contact of the bicycle the engines are built from: Kane's engine (disc contact only,
+    docs/engines.md) on a disc bicycle, not on the thesis's; ``--against`` a bicycle decides,
+    ``--against`` an engine does not. Planted: the default taken from the model under test
+    even when --against names another bicycle fails the second assertion."""
+    from comparisons.cli.diagnose import _default_engines
+    thesis = _default_engines("thesis", None)
+    assert "pinocchio" in thesis and "kane" not in thesis and "reference" not in thesis
+    assert "kane" in _default_engines("thesis", "thesis-disc")
+    assert "kane" in _default_engines("thesis-disc", "pinocchio")
+    assert "kane" not in _default_engines("thesis", "pinocchio")
+
+
 def test_diagnose_names_the_contact_model():
-    d = diagnose("thesis", against="thesis-disc", n_states=8, tolerances=TOLS)
+    d = diagnose("thesis", against="thesis-disc", engines=("pinocchio",), n_states=8,
+                 tolerances=TOLS)
     assert d.localization.explanation.causes == ("contact",)
     assert d.localization.terms == ("D", "dD dq")
     assert d.declared == (("contact", "thesis", "disc"),)
@@ -287,4 +302,4 @@ def test_diagnose_parser_and_bad_inputs(tmp_path):
     with pytest.raises(ValueError, match="engines must name at least one engine other than the reference"):
         diagnose(THESIS_FILE, engines=(), tolerances=TOLS)
     with pytest.raises(ValueError, match="n_states must be an integer >= 4"):
-        diagnose(THESIS_FILE, n_states=1, tolerances=TOLS)
+        diagnose(THESIS_FILE, engines=("pinocchio",), n_states=1, tolerances=TOLS)

@@ -8,6 +8,7 @@ costs a few seconds, not the spawn of worker processes.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -26,6 +27,7 @@ from sweep_engines import local_client
 # significant digits; 1e-9 m/s is the issue's bound (the critical speeds are root-found to
 # xtol 1e-14 on the exact linearization, so only a wrong model or mapping misses it)
 WEAVE, CAPSIZE = 4.2923825363411, 6.0242620153884
+EXAMPLE_ENGINE = Path(__file__).parents[1] / "examples" / "numpy_engine" / "numpy_bicycle" / "engine.py"
 
 BROKEN_ENGINE = '''
 from engines.base import Engine
@@ -304,3 +306,33 @@ def test_the_spec_hash_covers_the_tolerance_values(tmp_path, benchmark_params, f
     failing = load_tolerances(failing_tolerances)
     assert spec_hash(spec(failing)) != base
     assert spec().as_json()["tolerances"]["mass_matrix"]["tolerance"] == 1e-12
+
+
+def test_default_engines_and_the_runs_come_from_the_engines_facts(benchmark_params):
+    """Without --engines a sweep compares every installed engine with terms on the base's
+    contact (`engines.term_engines`), named in the spec and so in its hash; its runs are the
+    reference's and those of every engine that declares a forward run on that contact with
+    no model difference: Pinocchio's, Exudyn's kinematic tree at h = 1e-3 s (docs/engines.md)
+    and Kane's, not MuJoCo's (a soft contact, a declared model difference). A plugin's
+    forward runs count like a built-in's. Planted: run_options without the run-difference
+    filter includes MuJoCo and fails."""
+    from engines import term_engines
+    from comparisons.stages.sweep_spec import spec_hash
+    from comparisons.stages.sweep_task import run_options
+    default = make_spec(benchmark_params, varies=["m3=80:90:2"], checks=("eigen", "runs"))
+    named = make_spec(benchmark_params, varies=["m3=80:90:2"], checks=("eigen", "runs"),
+                      engines=term_engines("disc"))
+    assert default.engines == named.engines and spec_hash(default) == spec_hash(named)
+    assert {"pinocchio", "exudyn", "kane", "mujoco"} <= set(default.engines)
+    runs = run_options(default)
+    assert list(runs)[0] == "reference" and "mujoco" not in runs
+    assert (runs["exudyn"].engine, dict(runs["exudyn"].options)) == \
+        ("exudyn", {"build": "tree", "step": 1e-3})
+    assert runs["pinocchio"].options == () and "kane" in runs
+    plugin = f"{EXAMPLE_ENGINE}:NumpyEngine"
+    only = make_spec(benchmark_params, varies=["m3=80:90:2"], checks=("eigen", "runs"),
+                     engines=(plugin,))
+    assert list(run_options(only)) == ["reference", "NumpyEngine"]
+    assert "run.weave.0.9.NumpyEngine" in columns(only)
+    with pytest.raises(SpecError, match="--engines: give at least one engine"):
+        make_spec(benchmark_params, varies=["m3=80:90:2"], engines=())

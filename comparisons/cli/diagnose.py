@@ -28,8 +28,9 @@ def add_diagnose_parser(subparsers) -> None:
                    help="an engine to check: a name, package.module:Class or path/file.py:Class "
                         "(repeatable)")
     s.add_argument("--engines", default=None,
-                   help="comma-separated engine names, the same as --engine, e.g. "
-                        "pinocchio,exudyn,kane (kane: disc-contact models only) [pinocchio]")
+                   help="comma-separated engine names, the same as --engine ('bicycle-xval "
+                        "engines' lists them) [every installed engine with terms that models "
+                        "the bicycle's front contact]")
     from .engines import add_engine_option_argument
     add_engine_option_argument(s)
     s.add_argument("--against", default=None,
@@ -57,11 +58,12 @@ def run_diagnose(args) -> int:
     if args.engines is not None:
         names += [e.strip() for e in str(args.engines).split(",") if e.strip()]
         if not names:
-            raise UsageError("--engines: no engine given; name at least one, e.g. pinocchio")
-    names = tuple(dict.fromkeys(names or ["pinocchio"]))
+            raise UsageError("--engines: no engine given; name at least one (see 'bicycle-xval "
+                             "engines')")
+    names = tuple(dict.fromkeys(names)) or _default_engines(model, args.against)
     if "reference" in names:
         raise UsageError("--engines: 'reference' is the model under test; name the engines to "
-                         "compare with it, e.g. pinocchio")
+                         "compare with it (see 'bicycle-xval engines')")
     from engines import EngineSpecError
     from engines.registry import resolve
     for name in names:
@@ -84,3 +86,18 @@ def run_diagnose(args) -> int:
     if args.json is not None:
         write_text(args.json, json.dumps(result.to_dict(), indent=1) + "\n")
     return EXIT_OK if result.agrees else EXIT_FAIL
+
+
+def _default_engines(model, against) -> tuple[str, ...]:
+    """Every installed engine with terms that models the front contact of the bicycle the
+    engines are built from (``--against``'s when it names a bicycle, else the model's)."""
+    from engines import term_engines
+    from reference_model import resolve_model
+
+    from ..judgments.diagnose import _engine_named
+    bicycle = model if against is None or _engine_named(against) else against
+    names = term_engines(resolve_model(bicycle).contact)
+    if not names:
+        raise UsageError("diagnose: no installed engine computes terms on this bicycle's front "
+                         "contact; install one ('bicycle-xval engines') or name one with --engine")
+    return names

@@ -6,7 +6,7 @@
     bicycle-xval simulate --model thesis --scenario stability-psid10 --out FILE.csv
     bicycle-xval run [--out DIR] [--force] [--scenarios a,b] [--engines e,f] [--quick] [--jobs N]
                      [--tolerances FILE] [--model NAME|FILE ...] [--scenario-file FILE ...]
-    bicycle-xval diagnose FILE [--against MODEL] [--engines pinocchio,exudyn,kane] [--json OUT]
+    bicycle-xval diagnose FILE [--against MODEL] [--engines e,f] [--json OUT]
                           [--tolerances FILE]
     bicycle-xval eigenvalues --model benchmark --speeds 0:10:0.01 --out FILE.csv
     bicycle-xval import FILE --from benchmark --out my.toml [--name NAME]
@@ -93,24 +93,18 @@ def cmd_simulate(args) -> int:
         raise UsageError(f"--atol must be positive; got {args.atol}")
     if not 0 < args.fall_limit <= np.pi:
         raise UsageError(f"--fall-limit must be an angle in (0, pi] rad; got {args.fall_limit}")
-    if args.engine != "exudyn" and (args.build is not None or args.step is not None):
-        raise UsageError("--build and --step apply to --engine exudyn only (other engines: "
-                         "--engine-option key=value)")
-    if args.step is not None:
-        from engines.exudyn.engine import check_step
-        if not 0 < args.step <= 0.1:
-            raise UsageError(f"--step must be in (0, 0.1] s; got {args.step}")
-        check_step(args.step, 0.01)     # must divide the 0.01 s output grid (a usage error)
+    from engines.facts import engine_facts
+    fixed = engine_facts(args.engine).fixed_step
+    options = _fixed_step_options(args, fixed)
     sc = _scenario(args.scenario, "forward")
     model = _load(args.model, args.contact)
     from engines import load_engine, split_options
 
     from .engines import engine_options
-    options = engine_options(args.engine, args.engine_options)
-    options.update({k: v for k, v in (("build", args.build), ("step", args.step)) if v is not None})
+    options = {**engine_options(args.engine, args.engine_options), **options}
     engine = load_engine(args.engine, model, **options)
     settings = {"fall_limit": args.fall_limit}
-    if args.engine != "exudyn":   # the reference's integrator settings, where the engine takes them
+    if fixed is None:   # the reference's integrator settings, where the engine takes them
         settings.update(constraints=args.constraints, rtol=args.rtol, atol=args.atol)
     taken, ignored = split_options(engine.simulate, settings)
     ignored = {k: v for k, v in ignored.items() if v is not None}
@@ -129,6 +123,30 @@ def cmd_simulate(args) -> int:
     print(f"  {len(traj.t)} samples to t = {traj.t_end:.4f} s -> {args.out}; "
           f"max |C| = {np.abs(traj.C).max():.2e}")
     return EXIT_FAIL if traj.status == "failed" else EXIT_OK
+
+
+def _fixed_step_options(args, fixed) -> dict:
+    """The engine options of ``--build`` and ``--step``: a variant the engine's fixed-step
+    integrator declares (its option set) and its step option (`engines.facts.FixedStep`). An
+    engine that declares no fixed-step integrator takes neither (a usage error)."""
+    if args.build is None and args.step is None:
+        return {}
+    if fixed is None:
+        raise UsageError(f"--build and --step apply to an engine with a fixed-step integrator; "
+                         f"engine {args.engine!r} declares none (its options: --engine-option "
+                         "key=value, see 'bicycle-xval engines')")
+    options = {}
+    if args.build is not None:
+        if args.build not in fixed.variant_names:
+            raise UsageError(f"--build {args.build}: engine {args.engine!r} has no such variant; "
+                             f"choose one of: {', '.join(fixed.variant_names)}")
+        options.update(fixed.variant_options(args.build))
+    if args.step is not None:
+        # the engine checks that the step divides the scenario's output grid, before the run
+        if not 0 < args.step <= 0.1:
+            raise UsageError(f"--step must be in (0, 0.1] s; got {args.step}")
+        options[fixed.option] = args.step
+    return options
 
 
 def cmd_run(args) -> int:
@@ -258,9 +276,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "package.module:Class or path/file.py:Class [reference]")
     from .engines import add_engine_option_argument
     add_engine_option_argument(s)
-    s.add_argument("--build", choices=("redundant", "tree"), default=None,
-                   help="Exudyn only: redundant bodies + joints, or the kinematic tree [engine default]")
-    s.add_argument("--step", type=float, default=None, help="Exudyn only: time step, s [engine default]")
+    s.add_argument("--build", default=None, metavar="VARIANT",
+                   help="an engine with a fixed-step integrator only: one of the model variants "
+                        "it declares (e.g. a kinematic tree or redundant bodies + joints) "
+                        "[engine default]")
+    s.add_argument("--step", type=float, default=None,
+                   help="an engine with a fixed-step integrator only: its time step, s; it must "
+                        "divide the scenario's output interval [engine default]")
     s.add_argument("--constraints", choices=CONSTRAINT_HANDLING, default=None,
                    help="constraint handling [the scenario's: baumgarte a1 = a2 = 10, as the thesis]")
     s.add_argument("--rtol", type=float, default=1e-10, help="relative tolerance [1e-10]")
@@ -278,13 +300,14 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--engines", default=None,
                    help="comma-separated engines to compare with the reference: names (see "
                         "'bicycle-xval engines') or specs package.module:Class, path/file.py:Class "
-                        "[reference,pinocchio,exudyn,mujoco]")
+                        "[every installed engine]")
     from .engines import add_engine_option_argument as _add_opt
     _add_opt(s)
     s.add_argument("--quick", action="store_true", help="a fast subset")
+    from ..stages.pipeline import SECTIONS
     s.add_argument("--sections", default=None,
-                   help="engine sections besides the scenarios, comma-separated: terms, exudyn, "
-                        "benchmark, faults, contact (MuJoCo's contact study), or none [all]")
+                   help=f"engine sections besides the scenarios, comma-separated: "
+                        f"{', '.join(SECTIONS)}, or none [all]")
     s.add_argument("--no-data", action="store_true",
                    help="do not write data/<scenario>_<engine>.csv (the runs' samples)")
     s.add_argument("--no-html", action="store_true",

@@ -2,7 +2,7 @@
 
     bicycle-xval sweep --model benchmark --vary trail=0:0.2:41 --checks terms,eigen --out DIR
     bicycle-xval sweep --model benchmark --sample 1000 --spread 20 --seed 1 --out DIR \\
-                       [--engines pinocchio,exudyn] [--workers N | --scheduler tcp://host:8786]
+                       [--engines e,f] [--workers N | --scheduler tcp://host:8786]
 
 What each bicycle gets and the columns: `comparisons.stages.sweep_task`; the bicycles (grids,
 samples, the spec hash): `comparisons.stages.sweep_spec`; chunks, Dask, Parquet, resume:
@@ -37,8 +37,10 @@ def add_sweep_parser(sub) -> None:
     s.add_argument("--spread", type=float, default=None, metavar="P",
                    help="per cent around the base for --sample (inertias kept physical)")
     s.add_argument("--seed", type=int, default=0, help="seed of samples and states [0]")
-    s.add_argument("--engines", default="pinocchio,exudyn",
-                   help="engines compared with the reference [pinocchio,exudyn]")
+    s.add_argument("--engines", default=None,
+                   help="engines compared with the reference, comma-separated ('bicycle-xval "
+                        "engines' lists them) [every installed engine with terms that models "
+                        "the base model's front contact]")
     s.add_argument("--checks", default="terms,eigen",
                    help="terms, eigen, runs (comma-separated) [terms,eigen]")
     s.add_argument("--states", type=int, default=8,
@@ -64,10 +66,11 @@ def spec_from_args(args):
     from ..stages.sweep_spec import SpecError, make_spec
     resolve_model(args.model)        # unknown model: ParameterError (one line, exit 2)
     base = load_model(args.model).params
-    engines = tuple(e.strip() for e in args.engines.split(",") if e.strip())
-    if not engines:
-        raise UsageError("--engines: give at least one engine, e.g. pinocchio,exudyn")
-    for e in engines:
+    engines = None if args.engines is None else \
+        tuple(e.strip() for e in args.engines.split(",") if e.strip())
+    if engines == ():
+        raise UsageError("--engines: give at least one engine (see 'bicycle-xval engines')")
+    for e in engines or ():       # None: make_spec's default, every installed term engine
         try:
             resolve(e)
         except (EngineSpecError, EngineNotInstalled) as exc:

@@ -18,8 +18,6 @@ from pathlib import Path
 
 import pytest
 
-BUILTIN_ENGINES = ("pinocchio", "exudyn", "kane", "mujoco")
-
 
 @dataclass
 class Candidate:
@@ -70,7 +68,8 @@ def pytest_addoption(parser):
     g = parser.getgroup("bicycle-xval", "bicycle-xval engine conformance")
     g.addoption("--engine", dest="bx_engines", action="append", default=[], metavar="SPEC",
                 help="engine to check: a registered name, package.module:Class or "
-                     "path/file.py:Class (repeatable) [the built-ins: pinocchio, exudyn, kane, mujoco]")
+                     "path/file.py:Class (repeatable) [every registered engine but the reference: "
+                     "'bicycle-xval engines' lists them]")
     g.addoption("--engine-option", dest="bx_options", action="append", default=[],
                 metavar="KEY=VALUE", help="an option for every --engine (repeatable)")
     g.addoption("--model", dest="bx_models", action="append", default=[], metavar="NAME|FILE",
@@ -81,6 +80,15 @@ def pytest_addoption(parser):
     g.addoption("--tolerances", dest="bx_tolerances", default=None, metavar="FILE",
                 help="a tolerance file replacing comparisons/judgments/tolerances.toml (same "
                      "tables)")
+
+
+def default_engines() -> list[str]:
+    """Every registered engine but the reference (which every check compares against): an
+    engine whose extra is missing stays in the list, so the header says it was not checked and
+    why."""
+    from engines import available_engines
+    from engines.defaults import REFERENCE
+    return [e for e in available_engines() if e != REFERENCE]
 
 
 def read_xfails(path: Path) -> dict[str, str]:
@@ -108,7 +116,7 @@ def read_xfails(path: Path) -> dict[str, str]:
 
 
 def pytest_configure(config):
-    specs = list(config.getoption("bx_engines")) or list(BUILTIN_ENGINES)
+    specs = list(config.getoption("bx_engines")) or default_engines()
     from .models import DEFAULT_MODELS
     models = list(config.getoption("bx_models")) or list(DEFAULT_MODELS)
     options = {}

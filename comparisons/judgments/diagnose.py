@@ -90,7 +90,6 @@ __all__ = [   # the terms and their checks are `term_checks`', named here too (t
 ]
 
 STRUCTURAL = ("gyroscopic", "contact")
-COMPARED_ENGINES = ("pinocchio", "exudyn")
 EXPLAINED = 0.99          # fraction of the discrepancy a cause must explain to be named alone
 LOCALIZED = 0.90          # below this share nothing is printed as localized: no single cause
 DEFAULT_STATES = 24
@@ -741,15 +740,16 @@ def _declared(a: Model, b: Model) -> tuple[tuple[str, float | str, float | str],
 
 
 def diagnose(params_file: str | Path, against: str | Path | None = None,
-             engines: Sequence[str] = ("pinocchio",), n_states: int = DEFAULT_STATES,
+             engines: Sequence[str] = (), n_states: int = DEFAULT_STATES,
              seed: int = DEFAULT_SEED, options: Mapping[str, Mapping] | None = None, *,
              tolerances: Mapping[str, Tolerance]) -> Diagnosis:
     """The reference model of ``params_file`` (a .toml file or a named model) against the
     engines built from the same file (``against=None``: adapters and engines must agree) or
     from ``against`` (a named model or a file): which terms differ, at which entries, and the
     parameter (hence body) or structural cause that best explains it, with its estimated value
-    difference, every term judged by ``tolerances``. A bad file raises `ParameterError`; an unknown engine or too few states
-    ValueError."""
+    difference, every term judged by ``tolerances``. ``engines``: the engines to check (names
+    or specs, at least one; the caller chooses them, e.g. `engines.term_engines`). A bad file
+    raises `ParameterError`; no engine, an unknown engine or too few states ValueError."""
     engines = tuple(engines)
     if not engines or "reference" in engines:
         raise ValueError("engines must name at least one engine other than the reference (the "

@@ -236,7 +236,7 @@ def trajectory_result(fault: Fault, model: Model, engine, faulty: Model | None =
                        ())
 
 
-def run_fault_suite(engines: Sequence[str] = ("pinocchio",), n_states: int = DEFAULT_FAULT_STATES,
+def run_fault_suite(engines: Sequence[str], n_states: int = DEFAULT_FAULT_STATES,
                     base: str = "thesis", faults: Sequence[str] | None = None,
                     seed: int = DEFAULT_SEED, *,
                     tolerances: Mapping[str, Tolerance]) -> list[FaultResult]:
@@ -264,7 +264,7 @@ def run_fault_suite(engines: Sequence[str] = ("pinocchio",), n_states: int = DEF
     return results
 
 
-def unfaulted(engines: Sequence[str] = ("pinocchio",), n_states: int = DEFAULT_FAULT_STATES,
+def unfaulted(engines: Sequence[str], n_states: int = DEFAULT_FAULT_STATES,
               base: str = "thesis", seed: int = DEFAULT_SEED, *,
               tolerances: Mapping[str, Tolerance]) -> Localization:
     """The control: the correct model against the same engines (must agree)."""

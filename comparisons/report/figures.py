@@ -4,7 +4,10 @@ Stages describe a figure as data (`comparisons.stages.results.Figure`: a kind an
 it needs); `save_figure` draws it and writes the PNG atomically, quantized to a 256-colour
 palette (line plots lose nothing visible and the files shrink about threefold). Conventions:
 every axis carries its unit; a difference of round-off size is drawn as a difference on a log
-scale, never as a signal with an offset; each engine has one fixed style in every figure.
+scale, never as a signal with an offset; each engine has one fixed style in every figure,
+its declared colour with a line style per run setup (`comparisons.report.styles`), and a
+drawing names runs and engines only from its data (the curves' keys are run labels; an axis
+that names the engine compared takes it as ``engine_label``).
 """
 
 from __future__ import annotations
@@ -17,13 +20,11 @@ import numpy as np
 
 from reference_model import CONSTRAINT_NAMES, TORQUE_NAMES
 
+from .styles import style_of
+
 WIDTH = 10.0        # inches at DPI: the figures fill the report's content width
 DPI = 80
 FLOOR = 1e-17       # log-scale floor for exact zeros
-STYLE = {"reference": dict(color="k", ls="-", lw=1.6),
-         "pinocchio": dict(color="tab:orange", ls="--", lw=1.2),
-         "exudyn-tree": dict(color="tab:blue", ls=":", lw=1.4),
-         "exudyn-redundant": dict(color="tab:green", ls="-.", lw=1.1)}
 #: a signal whose spread is below this fraction of its size is drawn as a deviation (log scale)
 ROUND_OFF_SPREAD = 1e-9
 
@@ -57,10 +58,6 @@ def _plain_log_axes(fig) -> None:
             axis.set_minor_locator(NullLocator())
 
 
-def style(engine: str) -> dict:
-    return STYLE.get(engine, dict(lw=1.0))
-
-
 def _semilogy(ax, t, y, **kw):
     ax.semilogy(t, np.maximum(np.asarray(y, dtype=float), FLOOR), **kw)
 
@@ -79,17 +76,18 @@ def matrix_error(relative, labels, tolerance, title, colorbar):
     return fig
 
 
-def error_vs_time(curves, horizon, threshold, title):
+def error_vs_time(curves, horizon, threshold, title, engine_label="engine"):
+    """Each run's |error| to the reference against time (theta, and xc thinner); ``curves``:
+    run label -> {"t", "theta", "xc"}; ``engine_label`` names the engine on the axis."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(WIDTH, 3.6))
-    for build, c in curves.items():
-        lab = f"exudyn-{build}"
-        _semilogy(ax, c["t"], c["theta"], label=f"{lab}: theta [rad]", **style(lab))
-        _semilogy(ax, c["t"], c["xc"], label=f"{lab}: xc [m]", color=style(lab).get("color"),
+    for lab, c in curves.items():
+        _semilogy(ax, c["t"], c["theta"], label=f"{lab}: theta [rad]", **style_of(lab))
+        _semilogy(ax, c["t"], c["xc"], label=f"{lab}: xc [m]", color=style_of(lab).get("color"),
                   ls="-", lw=0.6, alpha=0.6)
     ax.axhline(threshold, color="grey", lw=0.8)
     ax.set_xlabel("t [s]")
-    ax.set_ylabel("|exudyn - reference| [rad or m]")
+    ax.set_ylabel(f"|{engine_label} - reference| [rad or m]")
     ax.set_title(title + f" (grey: {threshold:g})")
     ax.legend(fontsize=7, ncol=2)
     return fig
@@ -124,7 +122,7 @@ def lean_panels(panels, ylabel):
                              squeeze=False)
     for ax, p in zip(axes[:, 0], panels):
         for lab, (t, y) in p["lines"].items():
-            ax.plot(t, y, label=lab, **style(lab))
+            ax.plot(t, y, label=lab, **style_of(lab))
         ax.set_ylabel(ylabel)
         ax.set_title(p["title"], fontsize=9)
         ax.grid(True, lw=0.3)
@@ -133,19 +131,21 @@ def lean_panels(panels, ylabel):
     return fig
 
 
-def error_panels(panels, threshold):
+def error_panels(panels, threshold, engine_label="engine"):
+    """A panel per manoeuvre: each run's |error| to the reference (theta, and the max over q
+    dotted); ``panels``: [{"title", "curves": run label -> {"t", "theta", "max"}}]."""
     plt = _plt()
     fig, axes = plt.subplots(len(panels), 1, figsize=(WIDTH, 2.3 * len(panels)), sharex=True,
                              squeeze=False)
     for ax, p in zip(axes[:, 0], panels):
         for lab, c in p["curves"].items():
             _semilogy(ax, c["t"], c["theta"], label=f"{lab}: theta [rad]", lw=0.9,
-                      color=style(lab).get("color"))
+                      color=style_of(lab).get("color"))
             _semilogy(ax, c["t"], c["max"], label=f"{lab}: max over q [rad or m]", ls=":", lw=1.1,
-                      color=style(lab).get("color"))
+                      color=style_of(lab).get("color"))
         ax.axhline(threshold, color="grey", lw=0.8)
         ax.set_ylim(bottom=1e-12)
-        ax.set_ylabel("|exudyn - ref|\n[rad or m]")
+        ax.set_ylabel(f"|{engine_label} - ref|\n[rad or m]")
         ax.set_title(p["title"], fontsize=9)
         ax.grid(True, lw=0.3)
     axes[0, 0].legend(fontsize=7, ncol=2)
@@ -200,20 +200,20 @@ def torque_overlay(scenario, runs):
         if size > 0 and np.ptp(values) <= ROUND_OFF_SPREAD * size:
             mean = float(values.mean())
             for eng, r in runs.items():
-                _semilogy(ax[i], r.t, np.abs(r.T[:, i] - mean), label=eng, **style(eng))
+                _semilogy(ax[i], r.t, np.abs(r.T[:, i] - mean), label=eng, **style_of(eng))
             ax[i].set_ylabel(f"|{n} - {mean:.6g}|\n[N m]")
             ax[i].set_title(f"{n} is constant ({mean:.6g} N m) to round-off: its deviation",
                             fontsize=8)
             continue
         for eng, r in runs.items():
-            ax[i].plot(r.t, r.T[:, i], label=eng, **style(eng))
+            ax[i].plot(r.t, r.T[:, i], label=eng, **style_of(eng))
         ax[i].ticklabel_format(axis="y", useOffset=False)
         ax[i].set_ylabel(f"{n} [N m]")
     ax[0].legend(fontsize=7)
     for eng, r in runs.items():
         if eng != "reference":
             _semilogy(ax[3], r.t, np.abs(r.T - ref.T).max(axis=1), label=f"{eng}: max over torques",
-                      **style(eng))
+                      **style_of(eng))
     ax[3].set_ylabel("|T - T_ref| [N m]")
     ax[3].set_xlabel("t [s]")
     if len(runs) > 1:
@@ -231,14 +231,14 @@ def trajectory_overlay(scenario, runs, errors, horizon, threshold):
     plt = _plt()
     fig, ax = plt.subplots(3, 1, figsize=(WIDTH, 7), sharex=True)
     for eng, r in runs.items():
-        ax[0].plot(r.t, r.q[:, 3], label=f"{eng} ({r.status} at {r.t_end:.2f} s)", **style(eng))
-        ax[1].plot(r.t, r.q[:, 6], **style(eng))
+        ax[0].plot(r.t, r.q[:, 3], label=f"{eng} ({r.status} at {r.t_end:.2f} s)", **style_of(eng))
+        ax[1].plot(r.t, r.q[:, 6], **style_of(eng))
     ax[0].set_ylabel("theta (lean) [rad]")
     ax[1].set_ylabel("gamma (steer) [rad]")
     ax[0].legend(fontsize=7)
     for eng, (t, e) in errors.items():
         if len(t):
-            _semilogy(ax[2], t, e, label=f"{eng}: max over the 8 coordinates", **style(eng))
+            _semilogy(ax[2], t, e, label=f"{eng}: max over the 8 coordinates", **style_of(eng))
     for a in ax:
         a.axvline(horizon, color="grey", lw=0.8)
     ax[2].axhline(threshold, color="grey", lw=0.6, ls="--")
@@ -258,8 +258,8 @@ def constraint_residuals(panels, bound):
                              sharex=True, squeeze=False)
     for row, (name, lines) in zip(axes, panels.items()):
         for eng, (t, pos, vel) in lines.items():
-            _semilogy(row[0], t, pos, label=eng, **style(eng))
-            _semilogy(row[1], t, vel, label=eng, **style(eng))
+            _semilogy(row[0], t, pos, label=eng, **style_of(eng))
+            _semilogy(row[1], t, vel, label=eng, **style_of(eng))
         for a in row:
             a.axhline(bound, color="r", lw=0.6, ls="--")
         row[0].set_ylabel(f"{name}\n|{CONSTRAINT_NAMES[0]}| [m]", fontsize=8)
@@ -311,7 +311,7 @@ def replay_vs_zigzag(zigzag, replays):
     for i, lab in enumerate(("theta", "gamma")):
         ax[i].plot(zigzag[0], zigzag[1 + i], color="0.6", lw=3, label="zigzag (inverse kinematics)")
         for eng, r in replays.items():
-            ax[i].plot(r[0], r[1 + i], label=f"replay on {eng}", **style(eng))
+            ax[i].plot(r[0], r[1 + i], label=f"replay on {eng}", **style_of(eng))
         ax[i].set_ylabel(f"{lab} [rad]")
     ax[0].legend(fontsize=7)
     ax[-1].set_xlabel("t [s]")
@@ -319,19 +319,21 @@ def replay_vs_zigzag(zigzag, replays):
     return fig
 
 
-def contact_run(t, error, horizon, slip, penetration, normal, ideal_normal, title):
-    """A soft-contact run against ideal rolling: error, slip, penetration, normal forces."""
+def contact_run(t, error, horizon, slip, penetration, normal, ideal_normal, title,
+                engine_label="engine"):
+    """A soft-contact run against ideal rolling: error, slip, penetration, normal forces;
+    ``engine_label`` names the engine on the axes."""
     plt = _plt()
     fig, ax = plt.subplots(4, 1, figsize=(WIDTH, 8.4), sharex=True)
     _semilogy(ax[0], error["t"], error["max"], color="k", lw=1.0, label="max over q [rad or m]")
     _semilogy(ax[0], error["t"], error["theta"], color="tab:red", lw=0.8, label="theta [rad]")
-    ax[0].set_ylabel("|mujoco - ref|\n[rad or m]")
+    ax[0].set_ylabel(f"|{engine_label} - ref|\n[rad or m]")
     colours = {"rear": "tab:blue", "front": "tab:orange"}
     for w, c in colours.items():
         _semilogy(ax[1], t, slip[w], color=c, lw=0.9, label=w)
         ax[2].plot(t, 1e6 * np.asarray(penetration[w]), color=c, lw=0.9, label=w)
         if normal.get(w) is not None:
-            ax[3].plot(t, normal[w], color=c, lw=0.9, label=f"{w}: mujoco")
+            ax[3].plot(t, normal[w], color=c, lw=0.9, label=f"{w}: {engine_label}")
         ax[3].plot(ideal_normal["t"], ideal_normal[w], color=c, ls="--", lw=0.8,
                    label=f"{w}: ideal rolling needs")
     ax[0].set_ylim(bottom=1e-12)

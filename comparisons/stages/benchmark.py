@@ -281,7 +281,8 @@ def _manoeuvre_part(tols: Tolerances, sec: Section, model: Model, runs: list[Man
                "drift [% of E0]"), rows)
     sec.figure("benchmark_roll.png", "lean_panels", panels=panels, ylabel="theta (lean) [rad]")
     if error_panels:   # none when no manoeuvre ran on an engine
-        sec.figure("benchmark_error.png", "error_panels", panels=error_panels, threshold=DIVERGED)
+        sec.figure("benchmark_error.png", "error_panels", panels=error_panels, threshold=DIVERGED,
+                   engine_label=", ".join(labels))
     alone = [mr.scenario.name for mr in runs if not mr.engines]
     if alone and labels:
         sec.text(f"Run on the reference only (`--quick`: the engines run "

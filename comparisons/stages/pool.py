@@ -30,25 +30,48 @@ from engines.guard import describe
 from .signals import (Terminated, blocked, child_init, flush_streams, raise_terminated,
                       terminating)
 
-__all__ = ["MAX_WORKERS", "WARM_IMPORTS", "Limits", "StageTimeout", "Task", "TaskResult",
-           "Terminated", "call_in_worker", "default_workers", "raise_terminated", "run_tasks",
-           "warm_imports"]
+__all__ = ["BASE_IMPORTS", "MAX_WORKERS", "Limits", "StageTimeout", "Task", "TaskResult",
+           "Terminated", "call_in_worker", "default_workers", "engine_imports", "raise_terminated",
+           "run_tasks", "warm_imports"]
 
 MAX_WORKERS = 8
-#: imported once in the main process before the stages' workers fork, so each worker does not
-#: import them again (about a second of CPU per worker for the engines' libraries); matplotlib
-#: is the figure pool's (`comparisons.report.writer`), not imported for runs that draw none
-WARM_IMPORTS = ("scipy.integrate", "pinocchio", "exudyn", "mujoco",
-                "engines.pinocchio", "engines.exudyn", "engines.kane", "engines.mujoco")
+#: imported once in the main process before the stages' workers fork, besides every registered
+#: engine's module and the libraries it declares (`engine_imports`); matplotlib is the figure
+#: pool's (`comparisons.report.writer`), not imported for runs that draw none
+BASE_IMPORTS = ("scipy.integrate",)
 
 
-def warm_imports(names: tuple[str, ...] = WARM_IMPORTS) -> None:
+def engine_imports() -> tuple[str, ...]:
+    """The module of every registered engine (the ``module`` of its ``module:Class`` entry
+    point), in the registry's order; nothing is imported to list them. Importing one imports
+    its library when it is installed (the engine's package does, docs/engines.md), and
+    `warm_imports` imports the modules it declares in ``REQUIRES`` too."""
+    from engines.registry import registrations
+    return tuple(dict.fromkeys(r.target.partition(":")[0].strip() for r in registrations()))
+
+
+def warm_imports(names: tuple[str, ...] | None = None) -> None:
+    """Import ``names`` (default: `BASE_IMPORTS` and `engine_imports`) so that forked workers
+    inherit them instead of each importing them again (about a second of CPU per worker for
+    the engines' libraries). A module that does not import is skipped (an engine whose library
+    is absent: its stage says so), and so is a declared ``REQUIRES`` that is not installed."""
     import importlib
-    for name in names:
+
+    from engines.registry import missing_modules
+    for name in BASE_IMPORTS + engine_imports() if names is None else names:
         try:
-            importlib.import_module(name)
+            module = importlib.import_module(name)
         except Exception:   # noqa: BLE001 - an engine's library may be absent: its stage says so
-            pass
+            continue
+        requires = getattr(module, "REQUIRES", ())
+        if isinstance(requires, str) or not isinstance(requires, (tuple, list)):
+            continue        # malformed: the registry reports it when the engine is resolved
+        for lib in requires:
+            if isinstance(lib, str) and not missing_modules((lib.split(".")[0],)):
+                try:
+                    importlib.import_module(lib)
+                except Exception:   # noqa: BLE001 - the engine's own resolution reports it
+                    pass
 
 
 @dataclass(frozen=True)
@@ -219,14 +242,14 @@ def default_workers(n_tasks: int) -> int:
 
 def run_tasks(tasks: list[Task], workers: int | None = None,
               progress: Callable[[str], None] = lambda s: None,
-              warm: tuple[str, ...] = WARM_IMPORTS,
+              warm: tuple[str, ...] | None = None,
               limits: Limits | None = None) -> dict[Hashable, TaskResult]:
     """Run every task in worker processes; a task that raises (or whose worker dies) becomes a
     `TaskResult` with ``error`` set (the exception's type and message, one line), never an
     aborted run. ``warm``: modules imported in this process before the workers fork (they
-    inherit them). ``limits``: each task's time limit (`Limits`; None: none); a task past it
-    is 'timed out after N s', its worker killed and replaced, and one running longer than
-    expected is named on the progress line."""
+    inherit them; default `warm_imports`' own: the engines'). ``limits``: each task's time
+    limit (`Limits`; None: none); a task past it is 'timed out after N s', its worker killed
+    and replaced, and one running longer than expected is named on the progress line."""
     if not tasks:
         return {}
     order = sorted(tasks, key=lambda t: -t.cost)

@@ -97,7 +97,7 @@ class SweepSpec:
     sample: int = 0
     spread: float = 0.0                       # per cent
     seed: int = 0
-    engines: tuple[str, ...] = ("pinocchio", "exudyn")
+    engines: tuple[str, ...] = ()           # make_spec's default: `engines.term_engines`
     checks: tuple[str, ...] = ("terms", "eigen")
     n_states: int = 8
     #: what the terms are judged by (the CLI's --tolerances; default the packaged file)
@@ -169,9 +169,11 @@ def parse_vary(text: str) -> Grid:
 
 def make_spec(base: Parameters, *, varies=(), sample: int | None = None,
               spread: float | None = None, seed: int = 0,
-              engines=("pinocchio", "exudyn"), checks=("terms", "eigen"),
+              engines=None, checks=("terms", "eigen"),
               n_states: int = 8, tolerances: Tolerances | None = None) -> SweepSpec:
     """Validate the options into a `SweepSpec` (every grid point is built once here);
+    ``engines``: names or specs (None: every installed engine with terms that models the base's
+    front contact, `engines.term_engines`; the names are in the spec and its hash);
     ``tolerances``: what the checks are judged by (None: the packaged file; either way the
     values are in the spec and its hash)."""
     grids = tuple(parse_vary(v) if isinstance(v, str) else v for v in varies)
@@ -197,6 +199,12 @@ def make_spec(base: Parameters, *, varies=(), sample: int | None = None,
         raise SpecError("--spread applies to --sample only; a grid's range is its own")
     if not 0 <= seed < 2**63:
         raise SpecError(f"--seed {seed}: must be a non-negative integer below 2**63")
+    if engines is None:
+        from engines import term_engines
+        engines = term_engines(base.contact)
+    if not engines:
+        raise SpecError("--engines: give at least one engine (see 'bicycle-xval engines'; none "
+                        f"installed computes terms on the {base.contact!r} front contact)")
     if not 1 <= n_states <= 10_000:
         raise SpecError(f"--states {n_states}: must be between 1 and 10000")
     unknown = [c for c in checks if c not in CHECKS]

@@ -20,8 +20,9 @@ not asked for or could not run):
   best explanation by one parameter or structural cause);
 * eigen: ``weave_speed``, ``capsize_speed`` (m/s, in `stability.SPEED_RANGE`; NaN where none);
 * runs: ``run.<mode>.<factor>.<engine>`` = "confirmed" / "contradicted" / "failed: ..." for
-  forward runs at 0.9 and 1.1 x each critical speed (`stages.stability`'s scenario and
-  judgment), ``runs_confirmed``;
+  forward runs (on the reference and each engine `run_options` finds: those that declare a
+  forward run on the contact and no model difference) at 0.9 and 1.1 x each critical speed
+  (`stages.stability`'s scenario and judgment), ``runs_confirmed``;
 * ``task_seconds``: the wall time of this bicycle on its worker (the only column that differs
   between two runs of the same spec).
 
@@ -39,7 +40,6 @@ import numpy as np
 
 from .sweep_spec import DERIVED, SweepSpec, bicycle_parameters, derived_values, grid_point
 
-RUN_LABELS = {"reference": "reference", "pinocchio": "pinocchio", "exudyn": "exudyn-tree"}
 _TEMPLATES: dict[str, object] = {}     # contact -> a Model: the per-process generated-code cache
 
 
@@ -78,7 +78,7 @@ def columns(spec: SweepSpec) -> list[str]:
         cols += ["weave_speed", "capsize_speed"]
     if "runs" in spec.checks:
         cols += [f"run.{mode}.{f:g}.{e}" for mode in ("weave", "capsize")
-                 for f in _factors() for e in _run_engines(spec)]
+                 for f in _factors() for e in run_options(spec)]
         cols.append("runs_confirmed")
     cols.append("task_seconds")
     return cols
@@ -95,8 +95,23 @@ def _factors():
     return FACTORS
 
 
-def _run_engines(spec: SweepSpec) -> list[str]:
-    return ["reference"] + [e for e in spec.engines if e in RUN_LABELS and e != "reference"]
+def run_options(spec: SweepSpec) -> dict:
+    """label -> `runs.EngineSetup` of the forward runs: the reference's, then, for every engine
+    of the spec that models the spec's front contact, its first setup that goes into the
+    stability picture (`stability.simulating`: it runs forward scenarios and declares no model
+    difference; a soft contact's runs are not judged against ideal rolling's prediction)."""
+    from engines.defaults import REFERENCE
+    from engines.facts import engine_facts
+    from .runs import engine_setups
+    from .stability import simulating
+    out = {}
+    for e in (REFERENCE, *(e for e in spec.engines if e != REFERENCE)):
+        if spec.contact not in engine_facts(e).contacts:
+            continue
+        setup = next((s for s in engine_setups(e) if simulating(s)), None)
+        if setup is not None:
+            out[label_of(e)] = setup
+    return out
 
 
 def empty_row(spec: SweepSpec, k: int) -> dict:
@@ -225,19 +240,16 @@ def _explanation(model, states, engines, tolerances) -> str:
 
 
 def _runs(spec: SweepSpec, model, crit: dict[str, float], row: dict, failures: list[str]) -> bool:
-    """Forward runs below and above each critical speed on every engine that simulates (the
+    """Forward runs below and above each critical speed on the engines of `run_options` (the
     scenario and judgment of `stages.stability`); True when none contradicts the prediction."""
-    from engines import load_engine
-    from .runs import setup_of
     from .stability import judge_run, run_speeds
-    ok = True
+    ok, engines = True, run_options(spec)
     for mode, factor, speed in run_speeds(crit):
         scenario = _scenario(model, speed)
-        for e in _run_engines(spec):
+        for e, setup in engines.items():
             col = f"run.{mode}.{factor:g}.{e}"
             try:
-                setup = setup_of(e)
-                engine = load_engine(setup.engine, model, **dict(setup.options))
+                engine = setup.build(model)
                 traj = engine.simulate(scenario)
                 j = judge_run(model, mode, speed, traj)
             except Exception as exc:  # noqa: BLE001
