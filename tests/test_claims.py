@@ -378,3 +378,43 @@ def test_every_claim_of_a_selected_scenario_is_judged_for_every_engine(thesis):
     # a claim needing an unselected scenario is still listed (partly selected), not assessed
     out = judge_claims(runs, ["reference"], thesis, ["stability-psid1"])
     assert {c["claim_id"]: c["verdict"] for c in out} == {"stability-psid1": "reproduced"}
+
+
+# -- replay: one coordinate at a time, and a replay with no samples (issue 24) ------------------
+
+def _replay_departing_in(coordinate, depart_at=2.5):
+    """The zig-zag's coordinates with only ``coordinate`` (an index of q) off by 0.1 rad from
+    ``depart_at`` s: 100 x DEPART, on one side of the threshold whatever the round-off."""
+    def q(t):
+        out = _zigzag(t)
+        out[t >= depart_at - 1e-12, coordinate] += 0.1
+        return out
+    return run("replay", t_end=6.28, q=q)
+
+
+@pytest.mark.parametrize("coordinate", [THETA, GAMMA])
+def test_replay_departing_in_one_judged_coordinate_is_seen_when_it_departs(coordinate):
+    """theta alone, or gamma alone, leaving the zig-zag at 2.5 s: 'partly', departing at
+    2.5 s (the claim is about theta and gamma, so either one leaving is a departure)."""
+    v = judge("replay-identical", [ZIGZAG, _replay_departing_in(coordinate)])
+    assert v.verdict == "partly", v
+    assert number(v.evidence, r"until (\S+) s") == pytest.approx(2.5)
+
+
+@pytest.mark.parametrize("coordinate", [0, 1, 2, PSI, 5, 7])
+def test_replay_departing_in_another_coordinate_is_still_identical(coordinate):
+    """The claim is about theta and gamma (6.2.2.1's figures): the position, yaw, wheel angle,
+    steer-frame pitch or rear-wheel angle leaving the zig-zag does not make it 'not identical'."""
+    v = judge("replay-identical", [ZIGZAG, _replay_departing_in(coordinate)])
+    assert v.verdict == "reproduced", v
+
+
+@pytest.mark.parametrize("status, samples", [("fell", 0), ("fell", 1), ("completed", 0)])
+def test_replay_with_nothing_to_compare_is_not_assessed(status, samples):
+    """A replay that ends at once (no sample past the initial state in common with the
+    zig-zag) compares nothing: 'not assessed', never 'within 1e-03 rad until ...'."""
+    r = run("replay", status=status, t_end=6.28, q=_zigzag)
+    r.t, r.q, r.dq = r.t[:samples], r.q[:samples], r.dq[:samples]
+    v = judge("replay-identical", [ZIGZAG, r])
+    assert v.verdict == "not assessed", v
+    assert "within" not in v.evidence and "sample" in v.evidence
