@@ -418,3 +418,41 @@ def test_replay_with_nothing_to_compare_is_not_assessed(status, samples):
     v = judge("replay-identical", [ZIGZAG, r])
     assert v.verdict == "not assessed", v
     assert "within" not in v.evidence and "sample" in v.evidence
+
+
+# -- the survivors of `make mutants` in the check and psid10 judges ---------------------------
+
+def test_check_speed_change_is_relative_to_the_starting_speed(thesis):
+    """psi_dot 5 rad/s at the start, 10 rad/s from the next sample on: the relative change is
+    (10 - 5) / 5 = 1, not 5 / 10 (the speed the run starts from is the one the thesis
+    holds)."""
+    runs = _check_runs(thesis)
+    runs[1].dq[1:, PSI] = 10.0
+    v = judge("check-pedal-torque", runs, thesis)
+    assert v.verdict == "partly", v
+    assert number(v.evidence, r"psi_dot varies by (\S+)") == pytest.approx(1.0)
+
+
+def test_psid10_that_falls_before_0_1_s_is_not_reproduced():
+    """A run that falls at 0.05 s has no sample after 0.1 s: it never came to the vertical."""
+    v = judge("stability-psid10", [run("stability-psid10", "fell", 0.05,
+                                       _lean(lambda t: 0.2 + t))])
+    assert v.verdict == "not reproduced", v
+    assert "never below" in v.evidence and "fell at 0.050 s" in v.evidence
+
+
+def test_psid10_is_judged_on_its_last_sample():
+    """Upright from 0.5 s; the end is the last sample: 0.01 rad there is 'reproduced' with
+    |theta| = 0.010 at the end (0.04 on the sample before), 0.3 there is 'partly'."""
+    def lean(last):
+        def q(t):
+            out = np.zeros((t.size, 8))
+            out[:, THETA] = np.where(t < 0.5, 0.2, 0.04)
+            out[-1, THETA] = last
+            return out
+        return q
+    v = judge("stability-psid10", [run("stability-psid10", "completed", 6.28, lean(0.01))])
+    assert v.verdict == "reproduced", v
+    assert number(v.evidence, r"\|theta\| = (\S+) rad at the end") == pytest.approx(0.01)
+    v = judge("stability-psid10", [run("stability-psid10", "completed", 6.28, lean(0.3))])
+    assert v.verdict == "partly", v

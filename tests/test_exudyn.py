@@ -351,3 +351,24 @@ def test_jacobian_every_step_converges_newton_faster_to_the_same_run():
     assert runs["per-step"].settings["jacobian"] == "per-step"
     with pytest.raises(EngineError, match="unknown Jacobian update 'always'; choose one of"):
         load_engine("exudyn", bench, jacobian="always")
+
+
+def test_unwrap_shifts_by_whole_turns_from_a_nonzero_start_and_leaves_its_input():
+    """psi starting at 4 pi + 3 (wrapped: 3 rad): two whole turns up, whatever the wrapped
+    start; a one-sample run is shifted too, an empty one stays empty; the caller's array is
+    not written to; whole-radian integer samples come back as floats, not truncated."""
+    t = np.linspace(0, 1, 11)
+    q = np.zeros((t.size, 8))
+    q[:, 4] = 4 * np.pi + 3 + 2 * t
+    wrapped = q.copy()
+    wrapped[:, 2:] = (wrapped[:, 2:] + np.pi) % (2 * np.pi) - np.pi
+    before = wrapped.copy()
+    np.testing.assert_allclose(unwrap_angles(wrapped, q[0]), q, atol=1e-12)
+    assert np.array_equal(wrapped, before)
+    np.testing.assert_allclose(unwrap_angles(wrapped[:1], q[0]), q[:1], atol=1e-12)
+    assert unwrap_angles(np.zeros((0, 8)), q[0]).shape == (0, 8)
+    ints = np.zeros((3, 8), dtype=int)
+    ints[:, 4] = [0, 3, -3]                    # +3 then a jump of -6 rad: one turn up
+    out = unwrap_angles(ints)
+    assert out.dtype == float
+    np.testing.assert_allclose(out[:, 4], [0, 3, 2 * np.pi - 3], atol=1e-12)
