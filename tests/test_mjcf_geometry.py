@@ -37,7 +37,9 @@ BODIES = {"rear_wheel": 2, "frame": 3, "fork": 4, "front_wheel": 5}
 TYRES = {"rear_tyre": ("rear_wheel", "rC", "R_rear"), "front_tyre": ("front_wheel", "rD", "R_front")}
 
 
-@pytest.fixture(scope="module", params=["benchmark", "general-disc"])
+# function scope: the export is compiled in each test (~10 ms), so a mutation run sees every
+# test that reads the file as a test of the export (a module fixture counts for its first test only)
+@pytest.fixture(params=["benchmark", "general-disc"])
 def compiled(request):
     from comparisons.conformance.models import conformance_model
     model = (load_model("benchmark") if request.param == "benchmark"
