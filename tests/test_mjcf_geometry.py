@@ -129,3 +129,31 @@ def test_a_short_mujoco_run_on_the_benchmark_follows_the_reference():
     assert mine.status == ref.status == "completed", mine.message
     assert mine.t.shape == ref.t.shape and np.array_equal(mine.t, ref.t)
     assert np.abs(mine.q - ref.q).max() <= 1e-4
+
+
+@pytest.mark.parametrize("rear_height", [False, True])
+def test_the_massless_links_are_the_bodies_with_the_placeholder_mass(rear_height):
+    """`massless_links` names exactly the bodies the file gives the placeholder inertial (an
+    engine zeroes those after compiling): xc_link, yc_link, yaw, lean, and zc_link only in the
+    forward-run chain."""
+    from reference_model.export_mjcf import PLACEHOLDER_MASS, massless_links
+    mj = mujoco.MjModel.from_xml_string(mjcf_text(load_model("benchmark").params,
+                                                  rear_height=rear_height))
+    light = tuple(mj.body(i).name for i in range(1, mj.nbody)
+                  if mj.body_mass[i] == PLACEHOLDER_MASS)
+    assert massless_links(rear_height) == light
+    assert ("zc_link" in light) == rear_height
+    assert massless_links() == massless_links(False)
+
+
+def test_the_file_says_which_contact_it_approximates_and_its_settings_are_plain_data():
+    """A disc-contact model's file approximates its own contact; a thesis-contact model's file
+    says it does NOT model that contact (the declared difference travels with the file). The
+    settings' tuples come out as lists (a run's JSON settings)."""
+    disc = mjcf_text(load_model("benchmark").params)
+    thesis = mjcf_text(load_model("thesis").params)
+    assert "approximates this model's rolling-disc contact" in disc and "NOT" not in \
+        disc.split("CONTACT:")[1].split("NOT IN THIS FILE")[0]
+    assert "NOT this model's thesis fork-axis" in " ".join(thesis.replace("\n", " ").split())
+    d = MjcfSettings().as_dict()
+    assert d["solref"] == [2e-4, 1.0] and isinstance(d["solimp"], list)
