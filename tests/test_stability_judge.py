@@ -17,7 +17,7 @@ import pytest
 
 from comparisons.judgments.meijaard import (closed_form, closed_form_critical_speeds,
                                             closed_form_eigenvalues)
-from comparisons.stages.stability import FACTORS, judge_run, stability_model, stability_run
+from comparisons.stages.stability import FACTORS, judge_run, scenario, stability_model
 from reference_model.benchmark import to_benchmark
 
 SIGN = {("weave", 0.9): +1, ("weave", 1.1): -1, ("capsize", 0.9): -1, ("capsize", 1.1): +1}
@@ -57,7 +57,9 @@ def test_the_judge_predicts_the_closed_form_mode_and_the_run_confirms_it(bench, 
     speed = factor * crit[mode]
     expected = _followed(cf, mode, crit[mode], factor)
     assert np.sign(expected.real) == SIGN[(mode, factor)]     # the definitions of the speeds
-    j = judge_run(model, mode, speed, stability_run("benchmark", "reference", speed))
+    from engines import load_engine
+    run = load_engine("reference", model).simulate(scenario("benchmark", speed))
+    j = judge_run(model, mode, speed, run)
     # the model's exact linearization and the paper's closed form agree to ~1e-12 relative
     # (tests/test_linear_closed_form.py); 1e-8 /s leaves room and is far below the 0.07 /s
     # smallest real part here, so another mode (>= 0.4 /s away) cannot pass
