@@ -384,7 +384,7 @@ def test_mapping_on_a_general_bicycle_matches_the_reference(general_disc, one_st
     """The general disc bicycle (an off-axis fork CoM dx4, dz4, unequal wheels, every inertia
     distinct; thesis-disc's fork CoM is on the steering axis, so a wrong frame or sign on it
     cannot show there): every CoM and the steering-axis point rA equal the reference's points,
-    the round trip returns dq, and the bodies' kinetic energy is the reference's, in a batch
+    the round trips return q (to whole turns) and dq, and the bodies' kinetic energy is the reference's, in a batch
     and for one state (8,). Round-off only: 1e-12."""
     disc = general_disc
     assert disc.params.dx4 != 0 and disc.params.dz4 != 0
@@ -396,6 +396,11 @@ def test_mapping_on_a_general_bicycle_matches_the_reference(general_disc, one_st
     for b in (2, 3, 4, 5):
         assert np.abs(st["r"][b] - pts[f"rG{b}"]).max() < 1e-12, b
     assert np.abs(st["rA"] - pts["rA"]).max() < 1e-12
+    q_back = poses_to_q(disc.params, st["r"][2], *(st["A"][b] for b in (2, 3, 4, 5)))
+    assert q_back.shape == q.shape
+    turns = (q_back - q)[..., 2:] / (2 * np.pi)          # the angles come back wrapped
+    assert np.abs(q_back[..., :2] - q[..., :2]).max() < 1e-12
+    assert np.abs(turns - np.round(turns)).max() < 1e-12
     dq_back = velocities_to_dq(disc.params, q, st["v"][2], *(st["w"][b] for b in (2, 3, 4, 5)))
     assert np.abs(dq_back - dq).max() < 1e-12
     np.testing.assert_allclose(_kinetic_energy(disc.params, st), disc.kinetic_energy(q, dq),
