@@ -38,10 +38,12 @@ example: $(STAMP)  ## the committed example report: markdown, figures, summary.j
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/run.py
 
-# Mutation testing of the judgment and solver modules (not part of `make test`): mutmut, set
-# up in pyproject.toml [tool.mutmut] (which modules, which fast tests, and why mutmut). Each
-# run starts afresh (mutmut caches results and would not notice changed tests); it prints the
-# surviving mutants (`mutmut show NAME` shows one) and the score. MUTANTS narrows it, e.g.
+# Mutation testing (not part of `make test`): mutmut, set up in pyproject.toml [tool.mutmut]
+# (which modules: the judgments, the sweep and stability stages, the solvers, the MJCF export,
+# the Exudyn mapping; which fast tests; why mutmut). Each run starts afresh (mutmut caches
+# results and would not notice changed tests); it prints the surviving mutants (`mutmut show
+# NAME` shows one) and the score. The whole set is ~7600 mutants, over an hour on the shared
+# 2-core machine (README, "Tests"); MUTANTS narrows it, e.g.
 # make mutants MUTANTS='comparisons.judgments.claims*'. Two worker processes (the machine's cores).
 MUTATION_STAMP = $(VENV)/.installed-mutation
 MUTANTS ?=

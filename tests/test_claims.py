@@ -378,3 +378,81 @@ def test_every_claim_of_a_selected_scenario_is_judged_for_every_engine(thesis):
     # a claim needing an unselected scenario is still listed (partly selected), not assessed
     out = judge_claims(runs, ["reference"], thesis, ["stability-psid1"])
     assert {c["claim_id"]: c["verdict"] for c in out} == {"stability-psid1": "reproduced"}
+
+
+# -- replay: one coordinate at a time, and a replay with no samples (issue 24) ------------------
+
+def _replay_departing_in(coordinate, depart_at=2.5):
+    """The zig-zag's coordinates with only ``coordinate`` (an index of q) off by 0.1 rad from
+    ``depart_at`` s: 100 x DEPART, on one side of the threshold whatever the round-off."""
+    def q(t):
+        out = _zigzag(t)
+        out[t >= depart_at - 1e-12, coordinate] += 0.1
+        return out
+    return run("replay", t_end=6.28, q=q)
+
+
+@pytest.mark.parametrize("coordinate", [THETA, GAMMA])
+def test_replay_departing_in_one_judged_coordinate_is_seen_when_it_departs(coordinate):
+    """theta alone, or gamma alone, leaving the zig-zag at 2.5 s: 'partly', departing at
+    2.5 s (the claim is about theta and gamma, so either one leaving is a departure)."""
+    v = judge("replay-identical", [ZIGZAG, _replay_departing_in(coordinate)])
+    assert v.verdict == "partly", v
+    assert number(v.evidence, r"until (\S+) s") == pytest.approx(2.5)
+
+
+@pytest.mark.parametrize("coordinate", [0, 1, 2, PSI, 5, 7])
+def test_replay_departing_in_another_coordinate_is_still_identical(coordinate):
+    """The claim is about theta and gamma (6.2.2.1's figures): the position, yaw, wheel angle,
+    steer-frame pitch or rear-wheel angle leaving the zig-zag does not make it 'not identical'."""
+    v = judge("replay-identical", [ZIGZAG, _replay_departing_in(coordinate)])
+    assert v.verdict == "reproduced", v
+
+
+@pytest.mark.parametrize("status, samples", [("fell", 0), ("fell", 1), ("completed", 0)])
+def test_replay_with_nothing_to_compare_is_not_assessed(status, samples):
+    """A replay that ends at once (no sample past the initial state in common with the
+    zig-zag) compares nothing: 'not assessed', never 'within 1e-03 rad until ...'."""
+    r = run("replay", status=status, t_end=6.28, q=_zigzag)
+    r.t, r.q, r.dq = r.t[:samples], r.q[:samples], r.dq[:samples]
+    v = judge("replay-identical", [ZIGZAG, r])
+    assert v.verdict == "not assessed", v
+    assert "within" not in v.evidence and "sample" in v.evidence
+
+
+# -- the survivors of `make mutants` in the check and psid10 judges ---------------------------
+
+def test_check_speed_change_is_relative_to_the_starting_speed(thesis):
+    """psi_dot 5 rad/s at the start, 10 rad/s from the next sample on: the relative change is
+    (10 - 5) / 5 = 1, not 5 / 10 (the speed the run starts from is the one the thesis
+    holds)."""
+    runs = _check_runs(thesis)
+    runs[1].dq[1:, PSI] = 10.0
+    v = judge("check-pedal-torque", runs, thesis)
+    assert v.verdict == "partly", v
+    assert number(v.evidence, r"psi_dot varies by (\S+)") == pytest.approx(1.0)
+
+
+def test_psid10_that_falls_before_0_1_s_is_not_reproduced():
+    """A run that falls at 0.05 s has no sample after 0.1 s: it never came to the vertical."""
+    v = judge("stability-psid10", [run("stability-psid10", "fell", 0.05,
+                                       _lean(lambda t: 0.2 + t))])
+    assert v.verdict == "not reproduced", v
+    assert "never below" in v.evidence and "fell at 0.050 s" in v.evidence
+
+
+def test_psid10_is_judged_on_its_last_sample():
+    """Upright from 0.5 s; the end is the last sample: 0.01 rad there is 'reproduced' with
+    |theta| = 0.010 at the end (0.04 on the sample before), 0.3 there is 'partly'."""
+    def lean(last):
+        def q(t):
+            out = np.zeros((t.size, 8))
+            out[:, THETA] = np.where(t < 0.5, 0.2, 0.04)
+            out[-1, THETA] = last
+            return out
+        return q
+    v = judge("stability-psid10", [run("stability-psid10", "completed", 6.28, lean(0.01))])
+    assert v.verdict == "reproduced", v
+    assert number(v.evidence, r"\|theta\| = (\S+) rad at the end") == pytest.approx(0.01)
+    v = judge("stability-psid10", [run("stability-psid10", "completed", 6.28, lean(0.3))])
+    assert v.verdict == "partly", v

@@ -103,6 +103,10 @@ def _replay_identical(engine, runs, model) -> Verdict:
         return Verdict("not assessed", "the zigzag inverse kinematics was not run in this report")
     r = runs[(engine, "replay")]
     n = min(len(r.t), len(zig.t))
+    if n < 2:     # nothing past the initial state to compare: no verdict on zero samples
+        return Verdict("not assessed", f"the replay and the zig-zag share {n} sample(s) "
+                                       f"(replay {_fall(r)}): nothing past the initial state "
+                                       "to compare")
     dev = np.abs(r.q[:n, [3, 6]] - zig.q[:n, [3, 6]]).max(axis=1)
     over = np.flatnonzero(dev > DEPART)
     if not over.size and r.status == "completed":
