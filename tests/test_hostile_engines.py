@@ -171,16 +171,16 @@ def test_a_hung_or_dead_engine_in_the_main_process_is_its_failure():
     stopped at the limit, an os._exit is a dead worker, both name the engine and the call, and
     the engine is not asked again."""
     from comparisons.stages.isolated import EngineGone, isolated
-    from comparisons.stages.runs import plugin_setup
+    from comparisons.stages.runs import setup_of
     from reference_model import load_model
     model = load_model("thesis")
     for cls, words in ((hostile.Sleeps, "timed out after 3 s"), (hostile.Dies, r"died \(exit status 7\)")):
-        eng = isolated(plugin_setup(_spec_of(cls)), timeout=3.0).build(model)
+        eng = isolated(setup_of(_spec_of(cls)), timeout=3.0).build(model)
         with pytest.raises(EngineGone, match=words):
             eng.mass_matrix(Q)
         with pytest.raises(EngineCallError, match="gravity skipped .an earlier call failed"):
             eng.gravity(Q)      # not asked again: a hang costs its limit once
-    ok = isolated(plugin_setup(_spec_of(hostile.Sleeps))).build(model)
+    ok = isolated(setup_of(_spec_of(hostile.Sleeps))).build(model)
     np.testing.assert_array_equal(ok.gravity(Q), model.Qgrav(Q))   # a call that works: its value
 
 

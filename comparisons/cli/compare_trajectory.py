@@ -135,16 +135,16 @@ def run_status(scenario, t, q) -> tuple[str, str]:
                          "fall, and what needs the rest of the run is not assessed")
 
 
-def _not_assessed_beyond(comps: list[dict], run: Run, horizon: float) -> None:
+def _not_assessed_beyond(comps: list, run: Run, horizon: float) -> None:
     """A trajectory comparison of a run that ends early, before the meaningful horizon, and did
-    not fall: not assessed (it compared only the start)."""
+    not fall: not assessed (it compared only the start). Rows are frozen: replaced in place."""
     if run.status != ENDED_EARLY or run.t_end >= horizon - 1e-9:
         return
-    for c in comps:
+    for i, c in enumerate(comps):
         if c["quantity"] == "trajectory":
-            c.update(passed=None, verdict="not assessed",
-                     why=f"the run ends at {run.t_end:g} s, before the meaningful horizon "
-                         f"{horizon:.2f} s, without a fall")
+            comps[i] = c.replace(passed=None, verdict="not assessed",
+                                 why=f"the run ends at {run.t_end:g} s, before the meaningful "
+                                     f"horizon {horizon:.2f} s, without a fall")
 
 
 def cmd_compare_trajectory(args) -> int:
