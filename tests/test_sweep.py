@@ -437,7 +437,7 @@ def test_a_rerun_with_another_n_in_the_same_out_computes_every_row(tmp_path, ben
     """The issue's case: m3 at 2 points, then at 3 in the same folder: 3 rows, the new ones
     computed (eigen only, ~0.1 s a bicycle)."""
     def sweep(n):
-        spec = make_spec(benchmark_params, varies=[f"m3=80:90:{n}"], engines=(),
+        spec = make_spec(benchmark_params, varies=[f"m3=80:90:{n}"], engines=("pinocchio",),
                          checks=("eigen",))
         return run_sweep(spec, tmp_path, client=client, progress=False)
     first, second = sweep(2), sweep(3)
