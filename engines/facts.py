@@ -89,6 +89,14 @@ class FixedStep:
     def variant_names(self) -> tuple[str, ...]:
         return tuple(v for v, _ in self.variants)
 
+    def runs(self, name: str, variants=None, sep: str = "-", **more) -> list[tuple[str, dict]]:
+        """(label, options) of each of ``variants`` (default all) at the declared step:
+        the label ``name{sep}variant`` (``name`` alone for an unnamed variant), the options the
+        variant's with the step and ``more``."""
+        return [(sep.join(x for x in (name, v) if x),
+                 self.variant_options(v, **{self.option: self.step}, **more))
+                for v in (self.variant_names if variants is None else variants)]
+
 
 @dataclass(frozen=True)
 class Refinement:

@@ -114,10 +114,8 @@ def fixed_step_runs(facts, quick: bool = False) -> tuple[BenchmarkRun, ...]:
     at its step with its declared benchmark options."""
     fx = facts.fixed_step
     variants = fx.quick_variants or fx.variant_names[:1] if quick else fx.variant_names
-    return tuple(BenchmarkRun("-".join(x for x in (facts.name, v) if x), facts.spec,
-                              tuple(sorted(fx.variant_options(
-                                  v, **{fx.option: fx.step}, **dict(fx.benchmark_options)).items())))
-                 for v in variants)
+    return tuple(BenchmarkRun(label, facts.spec, tuple(sorted(opts.items())))
+                 for label, opts in fx.runs(facts.name, variants, **dict(fx.benchmark_options)))
 
 
 @dataclass

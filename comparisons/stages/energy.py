@@ -54,9 +54,7 @@ def _runs_of(spec: str, options: dict) -> list[tuple[str, dict]]:
     from .runs import engine_setups
     f = engine_facts(spec)
     if f.fixed_step is not None and not options:
-        fx = f.fixed_step
-        return [(" ".join(x for x in (f.name, v) if x), fx.variant_options(v, **{fx.option: fx.step}))
-                for v in fx.variant_names]
+        return f.fixed_step.runs(f.name, sep=" ")
     s = engine_setups(spec, options)[0]
     return [(s.label, dict(s.options))]
 

@@ -63,10 +63,6 @@ def _build(spec: str, model, fixed, variant: str, **more):
     return load_engine(spec, model, **fixed.variant_options(variant, **more))
 
 
-def _run_label(name: str, variant: str) -> str:
-    return name if not variant else f"{name}-{variant}"
-
-
 @dataclass
 class TrajectoryPart:
     """One scenario's share of the trajectory section (a stage of its own, run in parallel)."""
@@ -92,9 +88,8 @@ def trajectory_part(spec: str, name: str) -> TrajectoryPart:
     start, step, n = sc.grid
     cut = dataclasses.replace(sc, grid=(start, step, min(n, int(np.ceil((hor.t - start) / step)) + 3)))
     rows, curves = [], {}
-    for variant in fixed.variant_names:
-        label = _run_label(facts.name, variant)
-        traj = _build(spec, model, fixed, variant, **{fixed.option: fixed.step}).simulate(cut)
+    for label, opts in fixed.runs(facts.name):
+        traj = load_engine(spec, model, **opts).simulate(cut)
         err = error_vs_time(ref, traj, coords=COORDINATES, horizon=hor.t)
         worst = float(err["max"].max())
         first = first_past(err)

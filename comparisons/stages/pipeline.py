@@ -170,7 +170,7 @@ def environment(setups, plan: Plan | None = None) -> dict:
     facts = plan.facts if plan is not None else {}
     quick = plan.quick if plan is not None else False
     return {
-        "packages": _versions(_distributions(facts.values())),
+        "packages": _versions(_engine_modules(facts.values())),
         "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "arch": platform.machine(),
                     "platform": platform.platform(terse=True)},
         "solvers": {s.label: s.settings for s in setups},
@@ -187,7 +187,7 @@ def environment(setups, plan: Plan | None = None) -> dict:
     }
 
 
-def _distributions(facts) -> tuple[str, ...]:
+def _engine_modules(facts) -> tuple[str, ...]:
     """The top-level modules the engines declare they need, each once."""
     return tuple(dict.fromkeys(m.split(".")[0] for f in facts for m in f.requires))
 
