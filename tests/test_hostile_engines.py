@@ -270,6 +270,11 @@ def test_a_report_is_written_when_every_stage_times_out(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["passed"] is False
     rows = {c["scenario"]: c for c in summary["comparisons"] if c["quantity"] == "not compared"}
-    assert set(rows) == {"check", "stability-psid5"}, summary["comparisons"]
-    assert "timed out after 0.05 s" in rows["check"]["localized_to"]
-    assert "Traceback" not in capsys.readouterr().err
+    err = capsys.readouterr().err
+    # the 5 s stability run cannot finish in 0.05 s; the reference's `check` (one evaluation)
+    # sometimes does on a warm cache, and then it is compared, not "not compared"
+    finished = {s for s in ("check", "stability-psid5") if f"] {s} on reference (" in err}
+    assert "stability-psid5" not in finished, err
+    assert set(rows) == {"check", "stability-psid5"} - finished, summary["comparisons"]
+    assert "timed out after 0.05 s" in rows["stability-psid5"]["localized_to"]
+    assert "Traceback" not in err
