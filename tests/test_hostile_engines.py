@@ -144,6 +144,7 @@ def test_a_real_ctrl_c_during_an_engine_call_is_not_swallowed(thesis):
     assert not isinstance(info.value, EngineCallError)
 
 
+@pytest.mark.slow
 def test_a_stage_past_its_limit_is_cancelled_and_its_worker_replaced():
     """run_tasks: the sleeping task is 'timed out after 2 s', its worker killed; every other
     task (queued after it on the same two workers) completes; a slow task is named once on
@@ -166,6 +167,37 @@ def test_a_stage_past_its_limit_is_cancelled_and_its_worker_replaced():
     assert took < 10.0   # the limit, not the sleep (600 s), sets the time
 
 
+def _exit_now(code):
+    os._exit(code)
+
+
+def test_after_a_worker_death_or_a_time_out_its_engines_queued_tasks_are_skipped():
+    """run_tasks on one worker (the queue's order is then the order of the costs): engine
+    'dies' kills its worker in its first task, engine 'hangs' passes its limit in its first;
+    their queued tasks are skipped, each a failure naming the task that fell; the other
+    engine's and the harness's own (engine None) tasks all run. Planted: not recording the
+    fallen engine (every 'dies' task is started, each killing a worker) fails this."""
+    from comparisons.stages.pool import Limits, Task, run_tasks
+    tasks = [Task(("dies", 0), _exit_now, (3,), cost=9.0, label="first of dies", engine="dies"),
+             Task(("hangs", 0), time.sleep, (hostile.SLEEP,), cost=8.0, label="first of hangs",
+                  engine="hangs"),
+             *(Task(("dies", k), abs, (-k,), cost=5.0 - k, engine="dies") for k in (1, 2)),
+             Task(("hangs", 1), abs, (-1,), cost=2.5, engine="hangs"),
+             *(Task(("good", k), abs, (-k,), cost=2.0, engine="good") for k in (1, 2)),
+             Task("harness", abs, (-7,), cost=1.0)]
+    done = run_tasks(tasks, workers=1, warm=(), limits=Limits(floor=0.5, factor=0.0))
+    assert done[("dies", 0)].error.startswith("its worker process died (exit status 3)")
+    assert done[("hangs", 0)].error.startswith("timed out after 0.5 s")
+    for k in (1, 2):
+        assert done[("dies", k)].error == ("skipped: its engine's worker died (exit status 3) "
+                                           "in 'first of dies'"), done[("dies", k)]
+    assert done[("hangs", 1)].error == ("skipped: its engine's worker timed out after 0.5 s "
+                                        "in 'first of hangs'")
+    assert [done[("good", k)].value for k in (1, 2)] == [1, 2]
+    assert done["harness"].value == 7
+
+
+@pytest.mark.slow
 def test_a_hung_or_dead_engine_in_the_main_process_is_its_failure():
     """The main process's own engine calls (M along the scenarios) run in workers: a hang is
     stopped at the limit, an os._exit is a dead worker, both name the engine and the call, and
@@ -202,6 +234,7 @@ def _failures_of(summary: dict, label: str) -> list[dict]:
             and (label in c["engines"] or f":{label}, " in str(c.get("scenario")))]
 
 
+@pytest.mark.slow
 def test_every_hostile_engine_beside_the_reference_and_pinocchio(tmp_path):
     """The issue's 'done when': with all of them in one run --quick, the report is written,
     the reference's and Pinocchio's results are complete and pass, each hostile engine's
@@ -239,6 +272,7 @@ def test_every_hostile_engine_beside_the_reference_and_pinocchio(tmp_path):
     assert "SystemExit" in dropped[_spec_of(hostile.ExitsInInit)]
 
 
+@pytest.mark.slow
 def test_a_hanging_engine_costs_its_stage_limit(tmp_path):
     """An engine that sleeps in M: its term stage and its main-process M call each stop at
     --stage-timeout (2 s), the report is written and says 'timed out after 2 s'."""
@@ -258,6 +292,7 @@ def test_an_engine_that_exits_while_being_built_fails_to_load(thesis):
         load_engine(_spec_of(hostile.ExitsInInit), thesis)
 
 
+@pytest.mark.slow
 def test_a_report_is_written_when_every_stage_times_out(tmp_path, capsys):
     """--stage-timeout 0.05 s stops every stage, the reference's runs and the meaningful
     horizon included: nothing can be compared, and the report says so (a `not compared` row

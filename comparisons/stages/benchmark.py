@@ -517,7 +517,7 @@ class BenchmarkStage(Stage):
                 out.append(Task(("convergence", run.label), benchmark_convergence,
                                 (run, f.fixed_step.option,
                                  tuple(h * f.fixed_step.step / 1e-3 for h in DEFAULT_STEPS)),
-                                6.0, f"benchmark: {f.label} convergence"))
+                                6.0, f"benchmark: {f.label} convergence", f.spec))
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:

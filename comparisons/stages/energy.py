@@ -160,7 +160,7 @@ class EnergyStage(Stage):
                             f"{where}energy drift of the reference"))
             out += [Task((f.spec, spec), energy_rows, (f.spec, plan.options_for(f.spec), spec),
                          f.costs.run_per_second * (1 + (f.fixed_step is not None)),
-                         f"{where}energy drift on {f.label}") for f in engines]
+                         f"{where}energy drift on {f.label}", f.spec) for f in engines]
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:

@@ -80,12 +80,12 @@ class FaultsStage(Stage):
         for f in plan.engines(lambda f: f.has_terms):
             if not plan.opts.models:
                 out.append(Task((f.spec, None), fault_entries, (plan.tolerances, f.spec),
-                                f.costs.faults, f"fault injection on {f.label}"))
+                                f.costs.faults, f"fault injection on {f.label}", f.spec))
             for m in plan.opts.models:
                 if m.contact in f.contacts:
                     out.append(Task((f.spec, m.spec), fault_entries,
                                     (plan.tolerances, f.spec, m.spec), f.costs.faults,
-                                    f"{m.name}: fault injection on {f.label}"))
+                                    f"{m.name}: fault injection on {f.label}", f.spec))
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:

@@ -236,14 +236,14 @@ class FixedStepStage(Stage):
                 for n in (QUICK_FORWARD if plan.quick else FORWARD):
                     out.append(Task(("trajectory", f.spec, n), trajectory_part, (f.spec, n),
                                     (2.4 if n == "replay" else 1.0) * len(f.fixed_step.variants),
-                                    f"{f.label} trajectories: {n}"))
+                                    f"{f.label} trajectories: {n}", f.spec))
                 out.append(Task(("convergence", f.spec, None), convergence_section,
                                 (f.spec, plan.quick), 5.0 if plan.quick else 8.0,
-                                f"{f.label} convergence order"))
+                                f"{f.label} convergence order", f.spec))
             for m in plan.opts.models:
                 out.append(Task(("convergence", f.spec, m.spec), convergence_section,
                                 (f.spec, plan.quick, m.spec), 3.0,
-                                f"{m.name}: {f.label} convergence order"))
+                                f"{m.name}: {f.label} convergence order", f.spec))
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:

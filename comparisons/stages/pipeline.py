@@ -202,7 +202,8 @@ def _core_tasks(opts: Options, setups, cases) -> list[Task]:
     tasks = [Task(("run", s.label, c.name), run_one,
                   (s, c.name) if c.origin == "built-in" and not opts.models
                   else (s, c.scenario, c.model),
-                  cost(s, c.name), f"{c.name} on {s.label}")
+                  cost(s, c.name), f"{c.name} on {s.label}",
+                  None if s.engine == "reference" else s.engine)
              for c in cases for s in setups]
     for c in cases:
         sc = c.scenario

@@ -76,13 +76,17 @@ def warm_imports(names: tuple[str, ...] | None = None) -> None:
 
 @dataclass(frozen=True)
 class Task:
-    """One call to run in a worker: ``func(*args)``; ``cost`` (s) orders the queue."""
+    """One call to run in a worker: ``func(*args)``; ``cost`` (s) orders the queue.
+    ``engine``: the engine whose code the call runs (its spec; None: the reference's or the
+    harness's own): once a worker dies or times out in one of its calls, its calls still
+    queued are not started (`run_tasks`)."""
 
     key: Hashable
     func: Callable[..., Any]
     args: tuple = ()
     cost: float = 1.0
     label: str = ""
+    engine: str | None = None
 
 
 @dataclass(frozen=True)
@@ -249,7 +253,10 @@ def run_tasks(tasks: list[Task], workers: int | None = None,
     aborted run. ``warm``: modules imported in this process before the workers fork (they
     inherit them; default `warm_imports`' own: the engines'). ``limits``: each task's time
     limit (`Limits`; None: none); a task past it is 'timed out after N s', its worker killed
-    and replaced, and one running longer than expected is named on the progress line."""
+    and replaced, and one running longer than expected is named on the progress line. Once a
+    task of an engine (`Task.engine`) has killed its worker or timed out, that engine's tasks
+    still queued are skipped, each a failure that says why: an engine that crashes its process
+    or hangs once is not given every other stage's time limit to do it again."""
     if not tasks:
         return {}
     order = sorted(tasks, key=lambda t: -t.cost)
@@ -258,29 +265,52 @@ def run_tasks(tasks: list[Task], workers: int | None = None,
     warm_imports(warm)
     queue = deque(range(len(order)))
     told: set[int] = set()     # tasks already named as slow
+    fallen: dict[str, str] = {}    # engine -> why its queued tasks are skipped
     pool = _Workers([(t.func, t.args) for t in order])
+
+    def done(task: Task, result: TaskResult) -> None:
+        results[task.key] = result
+        progress(_line(len(results), len(order), task, result))
+
+    def next_call() -> int | None:
+        """The next queued task to start; the skipped ones before it are recorded."""
+        while queue:
+            k = queue.popleft()
+            why = fallen.get(order[k].engine)
+            if why is None:
+                return k
+            done(order[k], TaskResult(order[k].key, None, 0.0, why))
+        return None
+
+    def fell(task: Task, error: str) -> None:
+        if task.engine is not None and task.engine not in fallen:
+            fallen[task.engine] = (f"skipped: its engine's worker {error.partition(';')[0]} "
+                                   f"in '{task.label or task.key}'")
+
     with terminating():
         try:
             for _ in range(workers):
-                pool.give(pool.fork(), queue.popleft())
+                if (k := next_call()) is not None:
+                    pool.give(pool.fork(), k)
             while pool.busy:
                 got = pool.reply(_wait(pool, order, limits, told, progress))
                 if got is None:
                     for conn, k in _overdue(pool, order, limits):
                         task = order[k]
                         pool.kill(conn)
-                        results[task.key] = TaskResult(task.key, None, limits.budget(task),
-                                                       _timed_out(limits, task))
-                        progress(_line(len(results), len(order), task, results[task.key]))
-                        if queue:
-                            pool.give(pool.fork(), queue.popleft())
+                        done(task, TaskResult(task.key, None, limits.budget(task),
+                                              _timed_out(limits, task)))
+                        fell(task, f"timed out after {limits.budget(task):.3g} s")
+                        if (k := next_call()) is not None:
+                            pool.give(pool.fork(), k)
                     continue
                 reply, free = got
                 task = order[reply.index]
-                results[task.key] = TaskResult(task.key, reply.value, reply.seconds, reply.error)
-                progress(_line(len(results), len(order), task, results[task.key]))
-                if queue:
-                    pool.give(free or pool.fork(), queue.popleft())
+                done(task, TaskResult(task.key, reply.value, reply.seconds, reply.error))
+                if free is None:
+                    fell(task, reply.error.removeprefix("its worker process "))
+                if (k := next_call()) is not None:
+                    pool.give(free or pool.fork(), k)
         finally:
             pool.close()
     return results

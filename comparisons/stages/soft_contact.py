@@ -290,17 +290,17 @@ class SoftContactStage(Stage):
         for f in plan.engines(lambda f: f.soft_contact is not None):
             if not plan.opts.models:
                 out.append(Task(("study", f.spec, MODEL), contact_study, (f.spec, plan.quick),
-                                1.5 if plan.quick else 3.0, f"{f.label} contact study"))
+                                1.5 if plan.quick else 3.0, f"{f.label} contact study", f.spec))
                 stab = tuple(n for n in plan.opts.scenarios if n.startswith("stability-"))
                 if stab and not plan.quick:   # ~2 s of runs: the full report only
                     out.append(Task(("claims", f.spec, MODEL), claims_on_disc, (f.spec, stab),
                                     0.4 * len(stab),
-                                    f"{f.label}: the stability claims on thesis-disc"))
+                                    f"{f.label}: the stability claims on thesis-disc", f.spec))
             for m in plan.opts.models:
                 if m.contact == "disc":
                     out.append(Task(("study", f.spec, m.spec), contact_study,
                                     (f.spec, plan.quick, m.spec), 1.5 if plan.quick else 3.0,
-                                    f"{m.name}: {f.label} contact study"))
+                                    f"{m.name}: {f.label} contact study", f.spec))
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:

@@ -226,7 +226,8 @@ class StabilityStage(Stage):
                         cost = 5.0 * plan.facts[s.engine].costs.run_per_second
                         out.append(Task(("run", m.spec, mode, speed, s.label), stability_run,
                                         (m.spec, s, speed), cost,
-                                        f"{m.name}: {factor:g} x {mode} speed on {s.label}"))
+                                        f"{m.name}: {factor:g} x {mode} speed on {s.label}",
+                                        None if s.engine == "reference" else s.engine))
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:

@@ -130,7 +130,8 @@ class TermsStage(Stage):
                 args = (plan.tolerances, f.spec, plan.options_for(f.spec), n)
                 out.append(Task((f.spec, spec), engine_terms, args if spec is None else args + ((spec,),),
                                 f.costs.terms,
-                                f"{f.label} term by term" + (f" on {name}" if name else "")))
+                                f"{f.label} term by term" + (f" on {name}" if name else ""),
+                                f.spec))
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:
