@@ -77,6 +77,7 @@ def test_manoeuvres_are_the_iftomm_ones(bench):
         assert round(0.01 / 1e-3) * 1e-3 == pytest.approx(0.01)  # Exudyn's step divides the grid
 
 
+@pytest.mark.slow
 def test_manoeuvres_move_forward_from_the_upright_pitch(runs):
     # the projection keeps beta = -lambda = -pi/10 (Table 1's head-angle complement), and the
     # rear wheel's positive spin drives the bike forward along +x at about v (the weave wiggles
@@ -125,6 +126,7 @@ def test_reduced_upright_mass_matrix_is_the_published_one(bench, engine):
 
 # -- the manoeuvres: physics on every engine ---------------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ENGINES)
 def test_weave_grows_at_4_m_s(runs, engine):
     # 4 m/s < weave speed: the roll-rate oscillation's envelope (peaks of |dtheta/dt| from 1 s,
@@ -138,6 +140,7 @@ def test_weave_grows_at_4_m_s(runs, engine):
     assert judge_outcome("benchmark-v4", 4.0, tr, engine).passed
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ENGINES)
 def test_weave_decays_at_4_6_m_s(runs, engine):
     # weave speed < 4.6 m/s < capsize speed: self-stable, the envelope decays
@@ -150,6 +153,7 @@ def test_weave_decays_at_4_6_m_s(runs, engine):
     assert judge_outcome("benchmark-v4.6", 4.6, tr, engine).passed
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ENGINES)
 def test_slow_capsize_at_8_m_s(runs, engine):
     # 8 m/s > capsize speed: the weave dies out (-2.69 /s) and the lean grows monotonically at
@@ -206,6 +210,7 @@ def test_the_deviation_from_linear_is_the_nonlinearity(bench):
     assert 1.8 <= order <= 2.2, (devs, amps, order)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ["exudyn-tree", "exudyn-redundant"])
 def test_exudyn_weave_at_8_m_s_is_the_published_one(runs, engine):
     # Exudyn's IFToMM run at 8 m/s (a = 6.2e-3 rad): the identified weave equals Table 2 to
@@ -220,6 +225,7 @@ def test_exudyn_weave_at_8_m_s_is_the_published_one(runs, engine):
 
 # -- energy ------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MANOEUVRES)
 def test_energy_drift_is_bounded(bench, runs, name):
     # no torques, no drag, ideal rolling: E = T + V is conserved by the exact motion.

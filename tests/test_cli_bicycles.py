@@ -166,6 +166,7 @@ def model_run(tmp_path_factory):
             "report": (out / "report.md").read_text()}
 
 
+@pytest.mark.slow
 def test_run_on_an_imported_bicycle_passes_and_names_it(model_run):
     assert model_run["code"] == 0
     s = model_run["summary"]

@@ -70,6 +70,7 @@ def test_key_changes_when_any_source_of_the_generated_code_changes(tmp_path):
     assert codegen.cache_key("thesis", package_dir=package, cc=("clang",)) != base
 
 
+@pytest.mark.slow
 def test_build_caches_and_recovers_from_damage(tmp_path, monkeypatch, fast_cc):
     monkeypatch.setenv("BICYCLE_XVAL_CACHE", str(tmp_path))
     monkeypatch.setenv("CC", fast_cc)   # the cache's logic, not the numbers: -O0 is enough
@@ -87,6 +88,7 @@ def test_build_caches_and_recovers_from_damage(tmp_path, monkeypatch, fast_cc):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "temporary folders left"
 
 
+@pytest.mark.slow
 def test_cached_code_computes_the_same_numbers(tmp_path, monkeypatch):
     """A fresh build in another cache folder gives bit-identical results (determinism)."""
     model = load_model("thesis")
@@ -110,6 +112,7 @@ def test_generated_code_is_not_committed():
     assert not [f for f in files if f.endswith((".so", "bicycle_generated.c"))]
 
 
+@pytest.mark.slow
 def test_the_run_path_imports_neither_sympy_nor_pandas():
     """sympy (0.3-0.5 s to import) is for generating code only, pandas (0.7 s) for the sweep
     and the ``eigenvalues`` table: the CLI, the pipeline, its workers' warm imports, a model

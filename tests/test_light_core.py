@@ -117,6 +117,7 @@ def test_the_engines_libraries_are_extras_not_core_dependencies():
     assert not heavy & {d.split("[")[0].split(">")[0] for d in project["dependencies"]}
 
 
+@pytest.mark.slow
 def test_engines_lists_each_missing_engine_with_its_pip_line(core_env, tmp_path):
     expected = _declared_missing()
     res = _core(core_env, "-m", "comparisons.cli", "engines", cwd=tmp_path)
@@ -129,6 +130,7 @@ def test_engines_lists_each_missing_engine_with_its_pip_line(core_env, tmp_path)
     assert "capabilities:" in res.stdout
 
 
+@pytest.mark.slow
 def test_run_runs_the_installed_engines_and_lists_the_others(core_env, tmp_path):
     """The default engine list without the libraries: exit 0, each missing engine on stderr
     and in the report as not run with its line, nothing dropped; naming one is exit 2."""
@@ -154,6 +156,7 @@ def test_run_runs_the_installed_engines_and_lists_the_others(core_env, tmp_path)
     assert res.returncode == 2 and len(err) == 1 and err[0].endswith(line), res.stderr[-2000:]
 
 
+@pytest.mark.slow
 def test_the_conformance_suite_runs_on_a_plugin_without_the_engine_libraries(core_env, tmp_path):
     res = _core(core_env, "-m", "pytest", "-p", "no:cacheprovider", "-q", "--pyargs",
                 "comparisons.conformance", "--engine", FILE_SPEC, "--model", "thesis-disc",
@@ -162,6 +165,7 @@ def test_the_conformance_suite_runs_on_a_plugin_without_the_engine_libraries(cor
     assert "1 passed" in res.stdout, res.stdout[-2000:]
 
 
+@pytest.mark.slow
 def test_sweep_without_dask_names_its_extra(core_env, tmp_path):
     """With an engine that is installed, so that Dask is the only thing missing."""
     installed = next(r.name for r in registrations()

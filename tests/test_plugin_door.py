@@ -32,6 +32,29 @@ def _pytest(*args, cwd):
                           cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
 
 
+def test_a_plugin_is_given_every_stage_its_capabilities_allow():
+    """The stages' plan for `run --quick --engines reference,FILE.py:Class` (no stage run: the
+    whole run is the slow test below): the plugin's terms, its fault injection, its energy drift
+    (it simulates) and its benchmark terms are asked for, as a built-in's are (issue 22).
+    Planted: the faults stage asking for a list of built-in names leaves the plugin out, and
+    this fails."""
+    from comparisons.stages.cases import build_cases
+    from comparisons.stages.pipeline import _stage_tasks, select
+    from comparisons.stages.runs import setups_for
+    from comparisons.stages.stage import Plan
+    from engines.facts import engine_facts
+    opts = select("check", True, f"reference,{FILE_SPEC}")
+    cases, _ = build_cases(opts.scenarios, opts.models, ())
+    plan = Plan(opts, tuple(setups_for(opts.engines)), {e: engine_facts(e) for e in opts.engines},
+                tuple(cases), {})
+    tasks = {t.key: t for t in _stage_tasks(plan)}
+    for stage in ("terms", "faults"):
+        assert (stage, (FILE_SPEC, None)) in tasks, (stage, sorted(map(str, tasks)))
+    assert ("energy", (FILE_SPEC, "thesis-disc")) in tasks, sorted(map(str, tasks))
+    assert ((FILE_SPEC, {}),) in tasks[("benchmark", "terms")].args
+
+
+@pytest.mark.slow
 def test_run_with_a_file_spec_compares_its_terms(tmp_path):
     out = tmp_path / "r"
     assert main(["run", "--quick", "--scenarios", "check", "--engines",
@@ -88,6 +111,7 @@ def test_diagnose_localizes_the_planted_bug_to_its_term_and_body(capsys):
     assert main(["diagnose", "--model", "thesis", "--engine", FILE_SPEC]) == 0
 
 
+@pytest.mark.slow
 def test_conformance_plugin_passes_the_correct_engine_and_fails_the_buggy_one(tmp_path):
     sel = ["--model", "thesis-disc", "-k", "sweep"]
     # the buggy engine: the four terms the bug touches fail (listed as expected failures with

@@ -241,6 +241,7 @@ def _short_forward(folder: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_same_inputs_give_the_same_report(tmp_path):
     """Determinism: two runs of a small subset (every engine, an inverse and a forward
     scenario, in worker processes finishing in any order) write byte-identical summary.json,
@@ -256,6 +257,7 @@ def test_same_inputs_give_the_same_report(tmp_path):
     assert "seconds" not in (a / "summary.json").read_text()
 
 
+@pytest.mark.slow
 def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
     """A tolerance is a claim: tighten the mass matrix's below round-off and the run must fail."""
     from comparisons.judgments.tolerances import TOLERANCES_FILE
@@ -275,6 +277,7 @@ def test_a_tolerance_too_tight_fails_the_run_with_exit_1(tmp_path):
     assert (out / "figures" / "zigzag_torques.png").is_file() and "Not drawn" not in text
 
 
+@pytest.mark.slow
 def test_the_workers_judge_by_the_given_tolerances(tmp_path, failing_tolerances):
     """--tolerances reaches the stages in worker processes as a value in their arguments: with
     every tolerance at 1e-300 (any round-off difference fails it) every judged comparison of

@@ -153,6 +153,7 @@ def reference_disc():
 RTOL_SAME_CODE = 1e-13
 
 
+@pytest.mark.slow
 def test_truncated_library_is_rebuilt_not_a_crash(cache, fast_cc, reference_thesis):
     so = _entry(cache, "thesis") / "libbicycle.so"
     with open(so, "r+b") as fh:      # issue 14: SIGBUS (exit 135) on every run
@@ -163,6 +164,7 @@ def test_truncated_library_is_rebuilt_not_a_crash(cache, fast_cc, reference_thes
     _no_litter(cache)
 
 
+@pytest.mark.slow
 def test_flipped_bytes_in_library_are_rebuilt_not_a_crash(cache, fast_cc, reference_thesis):
     so = _entry(cache, "thesis") / "libbicycle.so"
     data = bytearray(so.read_bytes())
@@ -174,6 +176,7 @@ def test_flipped_bytes_in_library_are_rebuilt_not_a_crash(cache, fast_cc, refere
     _no_litter(cache)
 
 
+@pytest.mark.slow
 def test_other_variants_library_copied_in_is_not_used(cache, fast_cc, reference_thesis, reference_disc):
     # the check can tell the variants apart: their D differ at Q by far more than round-off
     assert np.max(np.abs(reference_thesis["D"] - reference_disc["D"])) > 1e-3
@@ -182,6 +185,7 @@ def test_other_variants_library_copied_in_is_not_used(cache, fast_cc, reference_
     _assert_same(got, reference_thesis, RTOL_SAME_CODE)
 
 
+@pytest.mark.slow
 def test_other_variants_whole_entry_copied_in_is_not_used(cache, fast_cc, monkeypatch):
     """(In process: on main this gave wrong numbers, not a crash.)"""
     thesis, disc = _entry(cache, "thesis"), _entry(cache, "disc")
@@ -215,6 +219,7 @@ def _eigen(cache: Path, contact: str, monkeypatch) -> np.ndarray:
     return np.sort_complex(linearize.eigenvalues(model, 5.0))
 
 
+@pytest.mark.slow
 def test_other_contacts_linearize_file_copied_in_is_not_used(cache, benchmark_eigenvalues, monkeypatch):
     want, other = benchmark_eigenvalues["thesis"], benchmark_eigenvalues["disc"]
     assert np.max(np.abs(want - other)) > 0.1
@@ -225,6 +230,7 @@ def test_other_contacts_linearize_file_copied_in_is_not_used(cache, benchmark_ei
     np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10)
 
 
+@pytest.mark.slow
 def test_cut_linearize_file_is_regenerated(cache, benchmark_eigenvalues, monkeypatch):
     path = _linearize_file(cache, "thesis")
     lines = path.read_text().splitlines(keepends=True)
@@ -235,6 +241,7 @@ def test_cut_linearize_file_is_regenerated(cache, benchmark_eigenvalues, monkeyp
     _no_litter(cache)
 
 
+@pytest.mark.slow
 def test_killed_cold_build_leaves_no_litter(tmp_path, fast_cc, monkeypatch):
     """SIGTERM during a cold build (as soon as its temporary exists): the next build removes
     the killed build's temporary (issue 14: left in the cache for good)."""
@@ -293,6 +300,7 @@ def no_compiler_cache(tmp_path_factory, pristine) -> Path:
     return cache
 
 
+@pytest.mark.slow
 def test_cut_numpy_code_is_regenerated(no_compiler_cache, tmp_path, monkeypatch):
     cache = tmp_path / "cache"
     shutil.copytree(no_compiler_cache, cache)
@@ -307,6 +315,7 @@ def test_cut_numpy_code_is_regenerated(no_compiler_cache, tmp_path, monkeypatch)
 
 @pytest.mark.parametrize("cc, model", [("/nonexistent/bin/cc", "thesis"), ("/bin/false", "thesis"),
                                        ("/bin/true", "thesis"), ("/nonexistent/bin/cc", "thesis-disc")])
+@pytest.mark.slow
 def test_no_working_compiler_runs_on_numpy(no_compiler_cache, cc, model, reference_thesis,
                                            reference_disc):
     """No compiler, CC at nothing, a compiler that fails, one that writes no library: one
@@ -396,6 +405,7 @@ def test_unusable_cache_path_names_the_variable(tmp_path, monkeypatch):
     assert "BICYCLE_XVAL_CACHE" in text and str(not_a_folder) in text
 
 
+@pytest.mark.slow
 def test_concurrent_builds_keep_the_entry_committed_first(cache):
     """Two processes building the same variant: the second to finish keeps the intact entry
     the first committed (a process may be loading it), and replaces only a damaged one."""

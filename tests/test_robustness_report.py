@@ -25,6 +25,7 @@ def _cli(*args, env=None, **kw):
                             stderr=subprocess.PIPE, text=True, **kw)
 
 
+@pytest.mark.slow
 def test_run_never_touches_files_it_did_not_write(tmp_path):
     out = tmp_path / "r"
     (out / "data").mkdir(parents=True)
@@ -53,6 +54,7 @@ def test_a_failed_stage_leaves_the_old_report_as_it_was(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["r"]      # no staging folder left
 
 
+@pytest.mark.slow
 def test_report_is_utf8_whatever_the_locale(tmp_path):
     env = dict(os.environ, LANG="C", LC_ALL="C", PYTHONIOENCODING="ascii", PYTHONUTF8="0")
     proc = _cli(*TINY, "--out", str(tmp_path / "r"), env=env)

@@ -24,6 +24,10 @@ from pathlib import Path
 import psutil
 import pytest
 
+# signals and deaths in the harness's own process tree: make test-slow
+pytestmark = pytest.mark.slow
+
+
 ROOT = Path(__file__).resolve().parents[1]
 BOUND = 2.0   # s, from the signal to the last process of the run gone (the requirement)
 LINE = {signal.SIGTERM: "bicycle-xval: terminated; nothing written",

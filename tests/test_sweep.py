@@ -264,6 +264,7 @@ def remote_scheduler(tmp_path):
             p.wait(timeout=10)
 
 
+@pytest.mark.slow
 def test_a_remote_dask_worker_judges_by_the_given_tolerances(tmp_path, capsys, remote_scheduler,
                                                             failing_tolerances):
     """A sweep sent to a `dask worker` started in another environment, with a --tolerances file
@@ -340,6 +341,7 @@ def test_default_engines_and_the_runs_come_from_the_engines_facts(benchmark_para
 
 # -- issue 24: runs, the hash against every field, every column against its definition ---------
 
+@pytest.mark.slow
 def test_a_table1_sweep_with_runs_agrees_on_every_engine(tmp_path, benchmark_params, client):
     """The Table 1 bicycle alone with ``--checks runs`` (eigen added): the reference's and
     Pinocchio's runs at 0.9 and 1.1 x both critical speeds confirm the linear prediction

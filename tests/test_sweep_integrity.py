@@ -171,6 +171,7 @@ def test_a_huge_sweep_is_refused_naming_the_cap(tmp_path, capsys):
     assert "--bicycle-timeout" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_an_engine_hanging_on_one_bicycle_costs_its_time_limit(tmp_path, client):
     """Main: the sweep hung. The engine hangs on the 90 kg rider: "timed out after 2 s", the
     80 kg rider of the same chunk completes, and the sweep ends long before the hang would

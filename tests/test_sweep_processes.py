@@ -26,6 +26,10 @@ from comparisons.stages.sweep_task import columns
 from reference_model import load_model
 from sweep_engines import hostile_engines
 
+# signals and deaths in the harness's own process tree: make test-slow
+pytestmark = pytest.mark.slow
+
+
 ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture
