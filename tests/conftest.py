@@ -55,6 +55,14 @@ def quick_report(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def mujoco_quick_study():
+    """The built-in soft-contact engine's quick contact study (`stages.soft_contact`: four
+    runs of 0.3 s and one of 0.5 s, ~1.5 s), shared by the contact tests."""
+    from comparisons.stages.soft_contact import contact_study
+    return contact_study("mujoco", quick=True)
+
+
+@pytest.fixture(scope="session")
 def general(thesis):
     """The thesis bicycle made general (GENERAL_CHANGES), thesis front contact."""
     return Model(thesis.params.replace(name="general", **GENERAL_CHANGES))
