@@ -250,3 +250,68 @@ def test_a_run_with_two_soft_contact_engines(tmp_path):
     text = (out / "report.md").read_text()
     assert "Soft-contact engines side by side" in text
     assert "Soft twin contact study" in text and "MuJoCo contact study" in text
+
+
+# -- the stability picture's nonlinear runs against the linear prediction -------------------------
+
+WEAVE = 4.29238          # m/s: the benchmark's published weave speed (Meijaard et al. 2007)
+
+
+@pytest.fixture(scope="module")
+def weave_runs():
+    """The reference's two runs at 0.9 and 1.1 x the weave speed (~0.3 s)."""
+    from comparisons.stages.stability import FACTORS, scenario, stability_model
+    from engines import load_engine
+    model, _ = stability_model("benchmark")
+    eng = load_engine("reference", model)
+    return {f * WEAVE: eng.simulate(scenario("benchmark", f * WEAVE)) for f in FACTORS}
+
+
+def test_a_soft_contact_engines_stability_runs_are_reported_not_judged(weave_runs):
+    """The same runs under a judged label and under a soft-contact one: the judged rows pass
+    (the weave grows below its speed and decays above it, the speed's definition), the soft
+    rows carry the same measurement, passed None, the declared difference and whether the sign
+    agrees; a bicycle the engine cannot represent is 'not run', not a failure; an engine that
+    crashes still fails."""
+    from comparisons.stages.cases import model_spec
+    from comparisons.stages.stability import stability_section
+    runs = {}
+    for speed, traj in weave_runs.items():
+        runs[("weave", speed, "reference")] = traj
+        runs[("weave", speed, NAME)] = traj
+    slow = max(weave_runs)
+    runs[("weave", slow, "other")] = "not run on this model: it breaks A + B >= C"
+    errors = {("weave", slow, "broken"): "EngineError: diverged"}
+    sec = stability_section(model_spec("benchmark"), {"weave": WEAVE}, None, runs, errors,
+                            ("reference", NAME, "other", "broken"),
+                            {NAME: "soft contact", "other": "soft contact"})
+    rows = {(c["engines"][0], c["scenario"].split(" at ")[1][:6]): c for c in sec.comparisons}
+    judged = [c for (e, _), c in rows.items() if e == "reference"]
+    soft = [c for (e, _), c in rows.items() if e == NAME]
+    assert len(judged) == 2 and all(c["passed"] is True for c in judged)
+    assert len(soft) == 2 and all(c["passed"] is None and c["agrees"] is True
+                                  and c["declared_difference"] == "soft contact" for c in soft)
+    assert sorted(c["measured"] for c in soft) == sorted(c["measured"] for c in judged)
+    (other,) = [c for (e, _), c in rows.items() if e == "other"]
+    assert other["passed"] is None and other["note"].startswith("not run on this model")
+    (broken,) = [c for (e, _), c in rows.items() if e == "broken"]
+    assert broken["passed"] is False
+
+
+def test_the_stability_stage_runs_soft_contact_engines_in_full_runs_only():
+    from types import SimpleNamespace
+
+    from comparisons.stages.cases import model_spec
+    from comparisons.stages.runs import setups_for
+    from comparisons.stages.stability import StabilityStage
+    setups = tuple(setups_for(("reference", BUILT_IN, SPEC), {}))
+    m = model_spec("benchmark")
+    labels = {}
+    for quick in (False, True):
+        plan = Plan(opts=SimpleNamespace(models=(m,), quick=quick), setups=setups,
+                    facts={s.engine: engine_facts(s.engine) for s in setups},
+                    critical={m.spec: {"weave": WEAVE}})
+        labels[quick] = sorted({t.key[-1] for t in StabilityStage().tasks(plan)
+                                if t.key[0] == "run"})
+    assert labels[False] == sorted(["reference", BUILT_IN, NAME])
+    assert labels[True] == ["reference"]
