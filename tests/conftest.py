@@ -57,7 +57,7 @@ def quick_report(tmp_path_factory):
 @pytest.fixture(scope="session")
 def mujoco_quick_study():
     """The built-in soft-contact engine's quick contact study (`stages.soft_contact`: four
-    runs of 0.3 s and one of 0.5 s, ~1.5 s), shared by the contact tests."""
+    runs of 0.2 s and one of 0.5 s, ~1 s), shared by the contact tests."""
     from comparisons.stages.soft_contact import contact_study
     return contact_study("mujoco", quick=True)
 

@@ -140,7 +140,7 @@ def test_error_at_and_local_orders():
     np.testing.assert_allclose(local_orders([4, 2, 1], [8, 2, 1]), [2.0, 1.0], rtol=1e-12)
 
 
-# -- the stage on MuJoCo (quick: four runs of 0.3 s and one of 0.5 s, ~1 s) ---------------------
+# -- the stage on MuJoCo (quick: four runs of 0.2 s and one of 0.5 s, ~1 s) ---------------------
 
 @pytest.fixture(scope="module")
 def quick_study(mujoco_quick_study):
