@@ -9,8 +9,10 @@ own per-sample diagnostics (the figure's arrays), the ranking order from the row
 the twin's place from MuJoCo's documented constraint model (slip and error proportional to the
 contact's time constant: five times the time constant, about five times both).
 
-Cost: the twin's quick study (~1 s; the built-in's is the session's `mujoco_quick_study`, which
-tests/test_contact.py shares) and ms for the rest. The whole run on both engines is `slow`.
+Cost: the twin's quick study (~0.5 s, made once per session: `twin_quick_study`; the
+built-in's is `mujoco_quick_study`, which tests/test_contact.py shares), two 5 s reference runs
+at the benchmark's weave speeds (~0.3 s), and ms for the rest. The whole run on both engines is
+`slow`.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import pytest
 from comparisons.judgments.contact_ranking import ContactRow, contact_row, rank, shared_horizon
 from comparisons.stages.pool import TaskResult
 from comparisons.stages.results import Figure, Table
-from comparisons.stages.soft_contact import MODEL, SoftContactStage, contact_study
+from comparisons.stages.soft_contact import MODEL, SoftContactStage
 from comparisons.stages.soft_contact_claims import DiscClaims
 from comparisons.stages.stage import Plan
 from engines.facts import engine_facts
@@ -103,8 +105,8 @@ def test_a_row_measures_its_own_run_up_to_the_horizon():
 # -- two soft-contact engines through the stage ------------------------------------------------
 
 @pytest.fixture(scope="module")
-def twin_study():
-    return contact_study(SPEC, quick=True)
+def twin_study(twin_quick_study):
+    return twin_quick_study
 
 
 @pytest.fixture(scope="module")
