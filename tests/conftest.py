@@ -54,6 +54,39 @@ def quick_report(tmp_path_factory):
     return out, int(status.read_text()), json.loads((out / "summary.json").read_text(encoding="utf-8"))
 
 
+def _made_once(tmp_path_factory, name: str, make):
+    """``make()``, computed once per test session and pickled for the other pytest-xdist
+    workers (the first to need it makes it while holding a lock, as `quick_report` does)."""
+    import fcntl
+    import os
+    import pickle
+    base = tmp_path_factory.getbasetemp()
+    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    path = root / f"{name}.pickle"
+    with open(root / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not path.exists():
+            path.write_bytes(pickle.dumps(make()))
+    return pickle.loads(path.read_bytes())
+
+
+@pytest.fixture(scope="session")
+def mujoco_quick_study(tmp_path_factory):
+    """The built-in soft-contact engine's quick contact study (`stages.soft_contact`: four
+    runs of 0.2 s and one of 0.5 s, ~1 s), shared by the contact tests."""
+    from comparisons.stages.soft_contact import contact_study
+    return _made_once(tmp_path_factory, "mujoco-quick-study",
+                      lambda: contact_study("mujoco", quick=True))
+
+
+@pytest.fixture(scope="session")
+def twin_quick_study(tmp_path_factory):
+    """The same for the tests' second soft-contact engine (tests/soft_twin.py, ~0.5 s)."""
+    from comparisons.stages.soft_contact import contact_study
+    from soft_twin import SPEC
+    return _made_once(tmp_path_factory, "twin-quick-study", lambda: contact_study(SPEC, quick=True))
+
+
 @pytest.fixture(scope="session")
 def general(thesis):
     """The thesis bicycle made general (GENERAL_CHANGES), thesis front contact."""

@@ -140,12 +140,11 @@ def test_error_at_and_local_orders():
     np.testing.assert_allclose(local_orders([4, 2, 1], [8, 2, 1]), [2.0, 1.0], rtol=1e-12)
 
 
-# -- the stage on MuJoCo (quick: four runs of 0.3 s and one of 0.5 s, ~1 s) ---------------------
+# -- the stage on MuJoCo (quick: four runs of 0.2 s and one of 0.5 s, ~1 s) ---------------------
 
 @pytest.fixture(scope="module")
-def quick_study():
-    from comparisons.stages.soft_contact import contact_study
-    return contact_study("mujoco", quick=True)
+def quick_study(mujoco_quick_study):
+    return mujoco_quick_study.section
 
 
 def test_stage_states_the_contact_settings(quick_study):
@@ -188,17 +187,15 @@ def test_a_wheel_lifts_off_where_ideal_rolling_needs_the_ground_to_pull(quick_st
 
 
 def test_disc_claims_replace_only_mujocos_entries():
-    from comparisons.stages.soft_contact import DiscClaims, merge_claims, on_disc
-    ON_DISC = on_disc("MuJoCo")
-    from comparisons.stages.results import Section
+    from comparisons.stages.soft_contact_claims import DiscClaims, merge_claims, on_disc
     base = [{"claim_id": "stability-psid10", "engine": e, "verdict": v, "evidence": "x"}
             for e, v in (("reference", "partly"), ("mujoco", "not assessed"))]
     base.append({"claim_id": "check-pedal-torque", "engine": "mujoco", "verdict": "not assessed",
                  "evidence": "y"})
-    disc = DiscClaims([{"claim_id": "stability-psid10", "engine": "mujoco", "verdict": "partly",
-                        "evidence": ON_DISC + "fell at 1.692 s"}], Section("s"))
-    out = merge_claims(base, disc, "mujoco")
+    disc = DiscClaims("mujoco", "MuJoCo", ({"claim_id": "stability-psid10", "engine": "mujoco",
+                                            "verdict": "partly", "evidence": "fell at 1.692 s"},))
+    out = merge_claims(base, disc)
     assert [(c["engine"], c["claim_id"], c["verdict"]) for c in out] == [
         ("reference", "stability-psid10", "partly"), ("mujoco", "stability-psid10", "partly"),
         ("mujoco", "check-pedal-torque", "not assessed")]
-    assert out[1]["evidence"].startswith("on thesis-disc") and out[0]["evidence"] == "x"
+    assert out[1]["evidence"] == on_disc("MuJoCo") + "fell at 1.692 s" and out[0]["evidence"] == "x"

@@ -4,7 +4,9 @@ figures/*.png, data/<scenario>_<engine>.csv, timings.json.
 The folder is assembled beside ``out`` and swapped in whole (`files.ReportFolder`): an
 interrupted run leaves the previous report as it was, and files the harness did not write are
 never touched. Everything but timings.json is a function of the inputs only, so two runs give
-byte-identical reports.
+byte-identical reports, with one stated exception: the soft-contact study's cost of each
+engine's settings (run time per simulated second, measured; in its section, its ranking and
+summary.json's ``soft_contact_ranking``).
 """
 
 from __future__ import annotations

@@ -301,7 +301,7 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                           opts.scenarios if not opts.models else thesis_names)
     if opts.models:
         sections.insert(0, _models_section(opts, not_run))
-    fault_rows = []
+    fault_rows, stage_keys, extra_summary = [], {}, {}
     for stage in STAGES:   # each stage's results, keyed as it gave them, in task order
         mine = {t.key[1]: done[t.key] for t in tasks
                 if isinstance(t.key, tuple) and len(t.key) == 2 and t.key[0] == stage.name}
@@ -316,6 +316,12 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
             continue
         sections += part.sections
         fault_rows += part.faults
+        for k in part.summary:
+            if k in stage_keys:
+                raise ValueError(f"stages {stage_keys[k]} and {stage.name} both write "
+                                 f"summary.json's {k!r}")
+            stage_keys[k] = stage.name
+        extra_summary.update(part.summary)
 
     comparisons = [c for s in sections for c in s.comparisons]
     stray = [c for c in comparisons if not isinstance(c, Comparison)]
@@ -353,6 +359,10 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
         "figures": opts.figure_policy,
         "sections": list(opts.sections),
     }
+    clash = sorted(set(extra_summary) & set(summary))
+    if clash:   # a stage extends summary.json, never replaces the pipeline's keys
+        raise ValueError(f"a stage writes summary.json keys the pipeline owns: {clash}")
+    summary.update(extra_summary)
     if opts.models:
         # the weave and capsize speeds (m/s) of each disc-contact --model, by its name
         summary["critical_speeds"] = {m.name: critical[m.spec] for m in opts.models

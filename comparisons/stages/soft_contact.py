@@ -17,7 +17,16 @@ stability study's fastest run), or on each disc-contact ``--model``, the study r
   wheel lifts off: from there on the two models differ in kind, and the run is only shown;
 * the refinement study at `STUDY_TIME` (inside both horizons): the error against each series
   of settings the engine declares (`SoftContact.refinements`), each with its fitted order
-  (`judgments.contact.refinement_study`), and the engine's own reading of them.
+  (`judgments.contact.refinement_study`) and each setting's run time per simulated second,
+  and the engine's own reading of them;
+* the engines side by side (`ranking_section`, summary.json's ``soft_contact_ranking``): each
+  default run's row on a horizon shared by every engine, the last sample before ideal rolling
+  needs the ground to pull (`judgments.contact_ranking`), ranked by the error there;
+* in full runs, the thesis's stability claims on every engine's thesis-disc runs beside the
+  reference's (`soft_contact_claims`).
+
+The run times are measured (wall time over simulated time): the one part of the report that
+varies from run to run.
 
 The run's ``diagnostics`` carry per-wheel ``slip_speed_rear/front``, ``penetration_rear/front``
 and optionally ``normal_force_rear/front`` (docs/engines.md, "A soft contact's diagnostics").
@@ -25,6 +34,7 @@ and optionally ``normal_force_rear/front`` (docs/engines.md, "A soft contact's d
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,21 +44,30 @@ from reference_model import load_model
 from reference_model.scenarios import SCENARIOS, torque_input
 
 from ..judgments.contact import contact_fidelity, lift_off_time, refinement_study
+from ..judgments.contact_ranking import ContactRow, contact_row, rank, shared_horizon
 from ..judgments.convergence import HORIZON_THRESHOLD, meaningful_horizon, perturbed_scenario, \
     reference_run
 from ..judgments.rows import Comparison
 from .cases import slug
-from .results import Section
+from .results import Section, num
+from .soft_contact_claims import (DiscClaims, claims_on_disc, claims_section, merge_claims,
+                                  reference_claims_on_disc)
 from .stage import Assembled, Plan, Stage
 
-__all__ = ["MODEL", "SCENARIO", "STUDY_TIME", "DiscClaims", "SoftContactStage", "claims_on_disc",
-           "contact_study", "ideal_normal_forces", "merge_claims", "window"]
+__all__ = ["MODEL", "SCENARIO", "STUDY_TIME", "ContactStudy", "SoftContactStage",
+           "contact_study", "ideal_normal_forces", "ranking_section", "ranking_summary",
+           "window"]
 
 SCENARIO = "stability-psid10"
 MODEL = "thesis-disc"
-STUDY_TIME = 0.3        # s: psid10 before the steer runs away and before any wheel unloads
-WINDOW = 0.6            # s: the default run, past the first lift-off (about 0.45 s)
-QUICK_WINDOW = 0.5
+# The run lengths, per engine: the default run over WINDOW and every refinement run over
+# STUDY_TIME, i.e. 0.5 + 12 x 0.2 = 2.9 simulated s for the built-in engine's three series of
+# four (1.3 s quick: its one quick series). Measured on the built-in at 0.2 s against 0.3 s:
+# the same verdicts and orders (1.03 / 0.17 / 0.85 against 1.04 / 0.17 / 0.86), a third less
+# integration; 0.5 s is past the first lift-off (0.44 s) and the ranking's horizon (0.43 s).
+STUDY_TIME = 0.2        # s: psid10 before the steer runs away and before any wheel unloads
+WINDOW = 0.5            # s: the default run, past the first lift-off (about 0.45 s)
+QUICK_WINDOW = 0.5      # s: the same in a --quick run
 
 
 def window(quick: bool) -> float:
@@ -94,9 +113,29 @@ def ideal_normal_forces(model, ref) -> tuple[np.ndarray, np.ndarray]:
     return total - front, front
 
 
-def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
-    """The study (module docstring) of the engine ``spec`` as a report section, on thesis-disc
-    or on a user's disc-contact bicycle ``model_spec``. A stage."""
+@dataclass(frozen=True)
+class ContactStudy:
+    """One engine's study on one model: its section, and its default run's row of the
+    side-by-side ranking (None when the engine cannot represent the model)."""
+
+    section: Section
+    row: ContactRow | None
+
+
+def _timed(simulate, **options):
+    """(run, wall seconds) of ``simulate(**options)``."""
+    t0 = time.perf_counter()
+    run = simulate(**options)
+    return run, time.perf_counter() - t0
+
+
+def _per_second(seconds: float, run) -> float:
+    return seconds / run.t_end if run.t_end > 0 else float("nan")
+
+
+def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> ContactStudy:
+    """The study (module docstring) of the engine ``spec`` as a report section and its row of
+    the ranking, on thesis-disc or on a user's disc-contact bicycle ``model_spec``. A stage."""
     from engines import UnsupportedModel
     from engines.facts import engine_facts
     facts = engine_facts(spec)
@@ -110,13 +149,17 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
         eng = load_engine(spec, model)
     except UnsupportedModel as exc:   # a declared limitation: said, not failed
         sec.text(f"Not run on this model: {exc}")
-        return sec
-    run = eng.simulate(sc, t_end=window_s)
+        return ContactStudy(sec, None)
+    run, seconds = _timed(lambda **o: eng.simulate(sc, t_end=window_s, **o))
     s = run.settings
     sec.text(f"{who} with its own wheel-ground contact, on `{model.name}`"
              + (f" ({soft.about})" if soft.about else "")
              + f", and `{SCENARIO}`, against the reference (DOP853, rtol 1e-11, projection: the "
-             "rolling constraints hold exactly). The engine's default contact settings:")
+             "rolling constraints hold exactly). The engine's default contact settings (the "
+             "settings of its runs in every section), and their cost: this run took "
+             f"{_per_second(seconds, run):.2g} s of wall time per simulated second "
+             f"({seconds:.2g} s for {run.t_end:.2f} s; measured, it varies with the machine's "
+             "load):")
     if soft.settings_rows is not None:
         sec.table(("setting", "value"), soft.settings_rows(s))
 
@@ -129,6 +172,11 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
     rear, front = ideal_normal_forces(model, ref)
     need = np.minimum(rear, front)
     pull = np.flatnonzero(need < 0)
+    ideal_pull = float(ref.t[pull[0]]) if pull.size else None
+    row = contact_row(facts.name, who, ref, run,
+                      shared_horizon(ref.t, ideal_pull, hor.t, window_s), seconds,
+                      model=model.name, scenario=sc.name, lift_off_s=lift,
+                      settings=_settings_line(facts))
     pull_text = (f"the ideal model needs the ground to pull a wheel down from "
                  f"t = {ref.t[pull[0]]:.2f} s ({'rear' if rear[pull[0]] < 0 else 'front'} "
                  f"normal force {need[pull[0]]:.0f} N)" if pull.size else
@@ -155,7 +203,7 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
         "tolerance": None, "passed": None, "horizon": f.horizon,
         "slip_max": f.slip_max, "slip_rms": f.slip_rms,
         "penetration_max": f.penetration_max, "penetration_rms": f.penetration_rms,
-        "lift_off_s": lift, "ideal_pull_s": float(ref.t[pull[0]]) if pull.size else None,
+        "lift_off_s": lift, "ideal_pull_s": ideal_pull,
         "localized_to": f"slip max {f.slip_max:.1e} m/s ({f.slip_worst})",
         "note": "while both wheels are loaded; reported, not judged: a declared model "
                 "difference (soft contact)"}))
@@ -179,36 +227,45 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
     # -- the refinement study ---------------------------------------------------------------
     series = [r for r in soft.refinements if not quick or r.quick_values is not None]
     if not series:
-        return sec
+        return ContactStudy(sec, row)
     ref_study = reference_run(model, sc, t_end=STUDY_TIME)
     simulate = lambda **o: eng.simulate(sc, t_end=STUDY_TIME, **o)
-    studies = [refinement_study(ref_study,
-                                [(v, simulate(**r.options(v, s)))
-                                 for v in (r.quick_values if quick else r.values)],
-                                r.parameter, STUDY_TIME, r.held) for r in series]
+    studies, costs = [], []
+    for r in series:
+        timed = [(v, *_timed(simulate, **r.options(v, s)))
+                 for v in (r.quick_values if quick else r.values)]
+        studies.append(refinement_study(ref_study, [(v, run_v) for v, run_v, _ in timed],
+                                        r.parameter, STUDY_TIME, r.held))
+        # in the study's order, coarsest first
+        by_value = {v: _per_second(sec_v, run_v) for v, run_v, sec_v in timed}
+        costs.append([by_value[v] for v in studies[-1].values])
     sec.heading(f"Refinement: the error at {STUDY_TIME:g} s against the contact's settings")
     rows = []
-    for st in studies:
+    for st, cost in zip(studies, costs):
         rows.append((st.parameter.split(" [")[0], st.held,
                      ", ".join(f"{v:g}" for v in st.values),
                      ", ".join(f"{e:.2e}" for e in st.errors),
                      ", ".join(f"{x:.2e}" for x in st.slip_rms),
-                     ", ".join(f"{o:.2f}" for o in st.orders), f"{st.order:.2f}", st.verdict))
+                     ", ".join(f"{o:.2f}" for o in st.orders), f"{st.order:.2f}", st.verdict,
+                     ", ".join(f"{c:.2g}" for c in cost)))
         sec.comparisons.append(Comparison.of({
             "quantity": f"contact refinement ({st.parameter.split(' [')[0]}, {st.held})",
             "scenario": sc.name, "model": model.name, "engines": ["reference", facts.name],
             "max_error": min(st.errors), "tolerance": None, "passed": None,
             "order": st.order, "values": list(st.values), "errors": list(st.errors),
             "slip_rms": list(st.slip_rms), "verdict": st.verdict, "reason": st.verdict_reason,
+            "run_time_per_simulated_second": cost,
             "localized_to": f"order {st.order:.2f}: {st.verdict}",
             "note": "reported, not judged: a declared model difference (soft contact)"}))
     sec.table(("refined", "held", "values", f"error at {STUDY_TIME:g} s [rad, m]",
-               "slip RMS [m/s]", "local orders", "fitted order", "verdict"), rows,
+               "slip RMS [m/s]", "local orders", "fitted order", "verdict",
+               "run time per simulated second [s]"), rows,
               note="Error: max over the eight coordinates at the grid time "
                    f"{STUDY_TIME:g} s (inside the reference's meaningful horizon and before any "
                    "wheel unloads). Local orders: log(e_i/e_i+1)/log(v_i/v_i+1); fitted order: "
                    "the slope of log error against log value. Every other setting at the "
-                   "defaults above.")
+                   "defaults above. Run time: wall time of each run over its simulated "
+                   f"{STUDY_TIME:g} s (measured: the cost of each setting).")
     if soft.conclusion is not None:
         sec.text(soft.conclusion(studies, s))
     sec.figure(f"{prefix}_contact_refinement{tag}.png", "refinement",
@@ -216,105 +273,134 @@ def contact_study(spec: str, quick: bool, model_spec: str = MODEL) -> Section:
                                  f"{st.order:.2f}", "values": list(st.values),
                         "errors": list(st.errors)} for st in studies],
                at_time=STUDY_TIME, title=f"{who} against ideal rolling, {sc.name}")
+    return ContactStudy(sec, row)
+
+
+def _settings_line(facts) -> str:
+    """The engine's defaults as its first run setup states them (one line)."""
+    return next((u.settings for u in facts.run_setups if u.settings), "")
+
+
+def ranking_section(rows: list[ContactRow]) -> Section:
+    """The soft-contact engines side by side on one model and manoeuvre (`contact_ranking`):
+    one row per engine, closest to ideal rolling first."""
+    ranked = rank(rows)
+    first = ranked[0].row
+    sec = Section("Soft-contact engines side by side: how close to ideal rolling"
+                  + ("" if first.model == MODEL else f" on {first.model}"))
+    sec.text(f"Every engine with a soft wheel-ground contact ({len(ranked)}: "
+             f"{', '.join(r.row.label for r in ranked)}) on the same manoeuvre, `{first.scenario}` "
+             f"on `{first.model}`, at its default settings, against the ideal-rolling reference "
+             f"up to the same time, {first.horizon:.2f} s: the last output sample before ideal "
+             "rolling needs the ground to pull a wheel down (which no unilateral contact can), "
+             "within the reference's meaningful horizon. Ranked by the error at that time, "
+             "then by slip RMS; a run that ends before it comes last. Reported, not judged: "
+             "each soft contact is a declared model difference.")
+    sec.table(("rank", "engine", f"error at {first.horizon:.2f} s [rad, m]",
+               "max error up to it", "slip RMS [m/s]", "slip max [m/s]",
+               "penetration max [m]", "penetration RMS [m]", "first lift-off [s]",
+               "run time per simulated second [s]"),
+              [(str(r.rank), r.row.label,
+                num(r.row.error_at_horizon, ".2e") if r.row.reached
+                else f"ends at {r.row.simulated_s:.2f} s",
+                num(r.row.error_max, ".2e"), num(r.row.slip_rms, ".2e"),
+                num(r.row.slip_max, ".2e"), num(r.row.penetration_max, ".2e"),
+                num(r.row.penetration_rms, ".2e"), num(r.row.lift_off_s, ".2f"),
+                f"{r.row.run_time_per_simulated_second:.2g}") for r in ranked],
+              note="Errors: max over the eight coordinates; slip and penetration over both "
+                   "wheels' samples on the 0.01 s grid up to the shared time. Run time: wall "
+                   "time of the engine's default run of the study over its simulated time "
+                   "(measured on this machine, under its load; the only number here that "
+                   "varies from run to run). Each engine's settings and its refinement are "
+                   "in its contact study below.")
     return sec
 
 
-# -- the thesis's claims on a soft-contact engine --------------------------------------------
-
-def on_disc(label: str) -> str:
-    """The prefix of a claim's evidence judged on the engine's thesis-disc run."""
-    return (f"on thesis-disc ({label} has no thesis fork-axis contact; the claim judged on its "
-            "run of the same scenario with the disc contact): ")
-
-
-@dataclass
-class DiscClaims:
-    """The stability claims judged on an engine's and the reference's thesis-disc runs."""
-
-    claims: list[dict]       # judge_claims entries for the engine, evidence prefixed on_disc
-    section: Section
+def ranking_summary(rows: list[ContactRow]) -> dict:
+    """summary.json's entry for one model's ranking (``soft_contact_ranking``)."""
+    ranked = rank(rows)
+    first = ranked[0].row
+    return {"model": first.model, "scenario": first.scenario, "horizon_s": first.horizon,
+            "ranked_by": "error_at_horizon, then slip_rms; runs ending before the horizon last",
+            "rows": [{"rank": r.rank, **r.row.as_dict()} for r in ranked]}
 
 
-def claims_on_disc(spec: str, names: tuple[str, ...]) -> DiscClaims:
-    """The stability scenarios among ``names`` on the engine ``spec`` (defaults) and on the
-    reference, both on thesis-disc, and the thesis's claims that need them judged on each
-    (`judge_claims`). A stage."""
-    from engines.facts import engine_facts
-    from engines.runs import run_scenario
-
-    from ..judgments.claims import judge_claims
-    facts = engine_facts(spec)
-    who, name = facts.label, facts.name
-    model = load_model(MODEL)
-    stab = [n for n in names if n.startswith("stability-")]
-    runs = {}
-    built = {name: load_engine(spec, model), "reference": load_engine("reference", model)}
-    for n in stab:
-        for label, engine in built.items():
-            runs[(label, n)] = run_scenario(label, engine, model, SCENARIOS[n], ("forward",))
-    judged = [c for c in judge_claims(runs, ["reference", name], model, stab)
-              if c["claim_id"].startswith("stability-")]
-    sec = Section(f"{who} on thesis-disc: the thesis's stability claims")
-    sec.text(f"{who} cannot run the thesis's fork-axis contact, so the stability claims are "
-             "judged on its runs of the same scenarios with the disc contact (`thesis-disc`, "
-             "the engine's defaults), beside the reference's runs on `thesis-disc` (DOP853, the "
-             "scenario's Baumgarte constraint handling) for comparison. Where the steer whips a "
-             "wheel off the ground the runs leave the reference (see the contact study): the "
-             f"verdicts say what {who}'s bicycle does, not how closely it follows the reference.")
-    by = {(c["claim_id"], c["engine"]): c for c in judged}
-    ids = list(dict.fromkeys(c["claim_id"] for c in judged))
-    sec.table(("claim", "reference thesis-disc", f"{name} thesis-disc"),
-              [(next(c["claim"] for c in judged if c["claim_id"] == i),
-                f"{by[(i, 'reference')]['verdict']}: {by[(i, 'reference')]['evidence']}",
-                f"{by[(i, name)]['verdict']}: {by[(i, name)]['evidence']}") for i in ids])
-    mine = [dict(c, evidence=on_disc(who) + c["evidence"]) for c in judged if c["engine"] == name]
-    return DiscClaims(mine, sec)
-
-
-def merge_claims(claims: list[dict], disc: DiscClaims, engine: str) -> list[dict]:
-    """``claims`` with ``engine``'s entries replaced by their thesis-disc judgments where
-    made."""
-    new = {c["claim_id"]: c for c in disc.claims}
-    return [new.get(c["claim_id"], c) if c["engine"] == engine else c for c in claims]
+def _study_seconds(soft, quick: bool) -> float:
+    """Simulated seconds of one study: the default run and every refinement run."""
+    n = sum(len(r.quick_values if quick else r.values) for r in soft.refinements
+            if not quick or r.quick_values is not None)
+    return window(quick) + n * STUDY_TIME
 
 
 class SoftContactStage(Stage):
-    """The study of every engine declaring a soft contact: on thesis-disc with its claims there
-    (full runs), or on each disc-contact ``--model``."""
+    """The study of every engine declaring a soft contact, on thesis-disc (full runs: with
+    the stability claims there) or on each disc-contact ``--model``; the engines side by side
+    on each model."""
 
     name, section = "soft-contact", "contact"
 
     def tasks(self, plan: Plan) -> list:
         from .pool import Task
         out = []
-        for f in plan.engines(lambda f: f.soft_contact is not None):
-            if not plan.opts.models:
-                out.append(Task(("study", f.spec, MODEL), contact_study, (f.spec, plan.quick),
-                                1.5 if plan.quick else 3.0, f"{f.label} contact study", f.spec))
-                stab = tuple(n for n in plan.opts.scenarios if n.startswith("stability-"))
-                if stab and not plan.quick:   # ~2 s of runs: the full report only
-                    out.append(Task(("claims", f.spec, MODEL), claims_on_disc, (f.spec, stab),
-                                    0.4 * len(stab),
-                                    f"{f.label}: the stability claims on thesis-disc", f.spec))
-            for m in plan.opts.models:
-                if m.contact == "disc":
-                    out.append(Task(("study", f.spec, m.spec), contact_study,
-                                    (f.spec, plan.quick, m.spec), 1.5 if plan.quick else 3.0,
-                                    f"{m.name}: {f.label} contact study", f.spec))
+        soft = plan.engines(lambda f: f.soft_contact is not None)
+        models = [m.spec for m in plan.opts.models if m.contact == "disc"]
+        stab = tuple(n for n in plan.opts.scenarios if n.startswith("stability-"))
+        claims = bool(soft and stab and not plan.quick and not plan.opts.models)
+        if claims:   # the reference's thesis-disc runs, once for every engine
+            out.append(Task(("claims-reference", "reference", MODEL), reference_claims_on_disc,
+                            (stab,), 0.3 * len(stab), "reference: the stability runs on thesis-disc"))
+        for f in soft:
+            cost = f.costs.run_per_second * _study_seconds(f.soft_contact, plan.quick)
+            for m in models or ([] if plan.opts.models else [MODEL]):
+                on = "" if m == MODEL else f"{m}: "
+                out.append(Task(("study", f.spec, m), contact_study,
+                                (f.spec, plan.quick) + (() if m == MODEL else (m,)), cost,
+                                f"{on}{f.label} contact study", f.spec))
+            if claims:   # runs end at the fall, within about 2 s
+                out.append(Task(("claims", f.spec, MODEL), claims_on_disc, (f.spec, stab),
+                                f.costs.run_per_second * 2.0 * len(stab),
+                                f"{f.label}: the stability claims on thesis-disc", f.spec))
         return out
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:
         out = Assembled()
+        studies, failed, rows = [], [], {}
         for key in results:
-            kind, spec, _ = key
-            who = plan.facts[spec].label
-            title = f"{who} contact study" if kind == "study" else f"{who} claims on thesis-disc"
-            v, failed = self.value(results, key, title)
-            out.sections.append(failed or (v if kind == "study" else v.section))
+            kind, spec, model = key
+            if kind != "study":
+                continue
+            v, bad = self.value(results, key, f"{plan.facts[spec].label} contact study")
+            if bad is not None:
+                failed.append(bad)
+                continue
+            studies.append(v.section)
+            if v.row is not None:
+                rows.setdefault(model, []).append(v.row)
+        out.sections += [ranking_section(r) for r in rows.values()] + studies + failed
+        out.summary["soft_contact_ranking"] = [ranking_summary(r) for r in rows.values()]
+        disc, bad = self._claims(plan, results)
+        if disc:
+            ref = results.get(("claims-reference", "reference", MODEL))
+            out.sections.append(claims_section(
+                ref.value if ref is not None and ref.error is None else None, disc))
+        if ("claims-reference", "reference", MODEL) in results:
+            _, ref_failed = self.value(results, ("claims-reference", "reference", MODEL),
+                                       "reference: the stability runs on thesis-disc")
+            bad += [ref_failed] if ref_failed is not None else []
+        out.sections += bad
         return out
 
+    def _claims(self, plan: Plan, results: dict) -> tuple[list[DiscClaims], list[Section]]:
+        disc, bad = [], []
+        for key in results:
+            if key[0] == "claims":
+                v, failed = self.value(results, key,
+                                       f"{plan.facts[key[1]].label} claims on thesis-disc")
+                (disc.append(v) if failed is None else bad.append(failed))
+        return disc, bad
+
     def revise_claims(self, plan: Plan, results: dict, claims: list[dict]) -> list[dict]:
-        for (kind, spec, _), r in results.items():
+        for (kind, _, _), r in results.items():
             if kind == "claims" and r.error is None:
-                claims = merge_claims(claims, r.value, plan.facts[spec].name)
+                claims = merge_claims(claims, r.value)
         return claims

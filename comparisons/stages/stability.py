@@ -29,6 +29,12 @@ reported beside the linear value (the nonlinear run at this amplitude deviates f
 value by O(a^2) relative; only the sign is judged: 10 % from the critical speed the predicted
 real parts are 0.06 to 0.7 /s in magnitude for the benchmark and BicycleParameters-like sets,
 far from zero against that deviation).
+
+An engine whose forward runs declare a model difference (a soft contact: `soft_differing`)
+runs the same scenarios in a full run (not ``--quick``) and is measured the same way, each row
+*reported* (passed None, the difference declared), never a failure: a soft contact's runs are
+not a test of the rigid rolling model's linearization. A bicycle the engine cannot represent
+is `not run on this model`, with the reason.
 """
 
 from __future__ import annotations
@@ -56,6 +62,15 @@ def simulating(setup) -> bool:
     study, not a prediction's test)."""
     from engines.facts import engine_facts
     return "forward" in setup.kinds and engine_facts(setup.engine).run_difference is None
+
+
+def soft_differing(setup) -> str | None:
+    """The model difference a setup's forward runs declare (a soft contact), when they are
+    measured in the stability picture as reported rows; else None."""
+    from engines.facts import engine_facts
+    facts = engine_facts(setup.engine)
+    return (facts.run_difference if "forward" in setup.kinds and facts.soft_contact is not None
+            else None)
 
 
 def stability_model(spec: str) -> tuple[Model, str]:
@@ -116,6 +131,16 @@ def stability_run(spec: str, setup, speed: float):
     return setup.build(model).simulate(scenario(spec, speed))
 
 
+def differing_run(spec: str, setup, speed: float):
+    """`stability_run` of a setup declaring a model difference (`soft_differing`; a stage): the
+    Trajectory, or the reason (str) when the engine cannot represent the bicycle."""
+    from engines import UnsupportedModel
+    try:
+        return stability_run(spec, setup, speed)
+    except UnsupportedModel as exc:   # a declared limitation: said, not failed
+        return f"not run on this model: {exc}"
+
+
 def judge_run(model: Model, mode: str, speed: float, traj) -> dict:
     """Measured and predicted real part of ``mode`` at ``speed`` (module docstring)."""
     from reference_model.linearize import eigenvalues
@@ -142,10 +167,13 @@ def judge_run(model: Model, mode: str, speed: float, traj) -> dict:
 
 def stability_section(m, crit: dict[str, float], curves: dict | None,
                       runs: dict[tuple[str, float, str], object], errors: dict,
-                      labels: tuple[str, ...] = ()) -> Section:
+                      labels: tuple[str, ...] = (), differences: dict | None = None) -> Section:
     """The section of one model (``m`` a `cases.ModelSpec`): the eigenvalue figure, the critical
     speeds, the runs' table and figure; every run judged (module docstring). ``labels``: the
-    setups' order in the tables (default: as the runs come)."""
+    setups' order in the tables (default: as the runs come); ``differences``: label -> the
+    model difference its runs declare (their rows reported, not judged; a str in ``runs``: the
+    reason it was not run)."""
+    differences = differences or {}
     labels = tuple(labels) or tuple(dict.fromkeys(k[2] for k in (*runs, *errors)))
     sec = Section(f"Stability of {m.name} ({m.source})")
     model, note = stability_model(m.spec)
@@ -165,7 +193,9 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
         f"upright, roll rate {ROLL_RATE:g} rad/s, no torques, projection, 5 s. Judged: the sign "
         "of the mode's real part measured on the run equals the linear prediction (weave: "
         "envelope of |dtheta/dt| from 1 s; capsize: the real exponent identified by the matrix "
-        "pencil).")
+        "pencil)."
+        + (f" {', '.join(lab for lab in labels if lab in differences)}: a declared model difference (soft contact), "
+           "measured the same way and reported, not judged." if differences else ""))
     rows, panels = [], []
     for mode, factor, speed in run_speeds(crit):
         lines = {}
@@ -173,18 +203,34 @@ def stability_section(m, crit: dict[str, float], curves: dict | None,
         # identical report)
         for label in [lab for lab in labels if (mode, speed, lab) in runs]:
             traj = runs[(mode, speed, label)]
+            differs = differences.get(label)
+            where = f"{m.name} at {speed:.4f} m/s ({factor:g} x {mode} speed)"
+            if isinstance(traj, str):      # the engine cannot represent the bicycle
+                rows.append((mode, f"{factor:g} x = {speed:.4f}", label, "-", "-", "-",
+                             "not run", traj))
+                sec.comparisons.append(Comparison.of({
+                    "quantity": f"stability: {mode} run", "scenario": where, "model": m.name,
+                    "engines": [label], "max_error": None, "tolerance": None, "passed": None,
+                    "localized_to": "-", "note": traj}))
+                continue
             lines[label] = (traj.t, traj.q[:, 3])
             j = judge_run(model, mode, speed, traj)
+            word = ("pass" if j["passed"] else "FAIL") if differs is None else \
+                f"reported: {'agrees' if j['passed'] else 'differs'}"
             rows.append((mode, f"{factor:g} x = {speed:.4f}", label, f"{j['predicted']:+.4f}",
-                         f"{j['measured']:+.4f}", f"{mode} {j['expected']}",
-                         "pass" if j["passed"] else "FAIL", j["how"]))
+                         f"{j['measured']:+.4f}", f"{mode} {j['expected']}", word, j["how"]))
+            extra = {} if differs is None else {
+                "declared_difference": differs, "agrees": j["passed"],
+                "why": "declared model difference"}
             sec.comparisons.append(Comparison.of({
                 "quantity": f"stability: {mode} {j['expected']} (sign of its real part)",
-                "scenario": f"{m.name} at {speed:.4f} m/s ({factor:g} x {mode} speed)",
-                "model": m.name, "engines": [label], "max_error": None, "tolerance": None,
-                "passed": j["passed"], "measured": j["measured"], "predicted": j["expected"],
+                "scenario": where, "model": m.name, "engines": [label], "max_error": None,
+                "tolerance": None, "passed": j["passed"] if differs is None else None,
+                "measured": j["measured"], "predicted": j["expected"],
                 "linear": j["predicted"], "localized_to": f"measured {j['measured']:+.4f} /s",
-                "note": j["how"]}))
+                "note": j["how"] if differs is None else
+                f"{j['how']}; reported, not judged: a declared model difference ({differs})",
+                **extra}))
         for label in [lab for lab in labels if (mode, speed, lab) in errors]:
             err = errors[(mode, speed, label)]
             rows.append((mode, f"{factor:g} x = {speed:.4f}", label, "-", "-", "-", "FAIL", err))
@@ -222,9 +268,11 @@ class StabilityStage(Stage):
                             f"{m.name}: eigenvalues against speed"))
             for mode, factor, speed in run_speeds(plan.critical[m.spec]):
                 for s in plan.setups:
-                    if simulating(s):
+                    run = (stability_run if simulating(s) else
+                           differing_run if soft_differing(s) and not plan.quick else None)
+                    if run is not None:
                         cost = 5.0 * plan.facts[s.engine].costs.run_per_second
-                        out.append(Task(("run", m.spec, mode, speed, s.label), stability_run,
+                        out.append(Task(("run", m.spec, mode, speed, s.label), run,
                                         (m.spec, s, speed), cost,
                                         f"{m.name}: {factor:g} x {mode} speed on {s.label}",
                                         None if s.engine == "reference" else s.engine))
@@ -232,7 +280,9 @@ class StabilityStage(Stage):
 
     def assemble(self, plan: Plan, results: dict) -> Assembled:
         out = Assembled()
-        labels = tuple(s.label for s in plan.setups if simulating(s))
+        differences = {s.label: d for s in plan.setups
+                       if not plan.quick and (d := soft_differing(s)) is not None}
+        labels = tuple(s.label for s in plan.setups if simulating(s) or s.label in differences)
         for m in plan.opts.models:
             why = applies(m.contact)
             if why is not None:
@@ -250,5 +300,5 @@ class StabilityStage(Stage):
                         errors[key[2:]] = r.error
             out.sections.append(stability_section(m, plan.critical[m.spec],
                                                   curves.value if curves.error is None else None,
-                                                  runs, errors, labels))
+                                                  runs, errors, labels, differences))
         return out

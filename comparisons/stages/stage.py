@@ -54,11 +54,13 @@ class Plan:
 
 @dataclass
 class Assembled:
-    """A stage's share of the report: its sections, and fault-injection entries (the fault
-    table's rows, which summary.json lists apart)."""
+    """A stage's share of the report: its sections, fault-injection entries (the fault
+    table's rows, which summary.json lists apart) and ``summary``: keys it adds to summary.json
+    (plain data; a key the pipeline or another stage already wrote is refused)."""
 
     sections: list[Section] = field(default_factory=list)
     faults: list[dict] = field(default_factory=list)
+    summary: dict = field(default_factory=dict)
 
 
 def failed_section(title: str, error: str) -> Section:
