@@ -26,6 +26,19 @@ class Killer(Engine):
             os._exit(3)
         return self.model.mass_matrix(q)
 
+class Freezer(Engine):
+    """The reference's M; for a rider heavier than 85 kg it sleeps 600 s inside C *holding
+    the interpreter lock* (a ctypes.PyDLL call keeps the GIL), as a C loop that never releases
+    it would: its whole worker process freezes, threads and heartbeats included."""
+    name = "freezer"
+    capabilities = frozenset({"mass_matrix"})
+
+    def mass_matrix(self, q):
+        if self.model.params.m3 > 85.0:
+            import ctypes
+            ctypes.PyDLL(None).sleep(600)
+        return self.model.mass_matrix(q)
+
 class Sleeper(Engine):
     """The reference's M; hangs (sleeps 30 s) for a rider heavier than 85 kg."""
     name = "sleeper"
@@ -39,7 +52,8 @@ class Sleeper(Engine):
 
 
 def hostile_engines(folder: Path) -> Path:
-    """`HOSTILE` written to ``folder/hostile.py``: engines ``<path>:Killer``, ``<path>:Sleeper``."""
+    """`HOSTILE` written to ``folder/hostile.py``: engines ``<path>:Killer``, ``<path>:Sleeper``,
+    ``<path>:Freezer``."""
     path = Path(folder) / "hostile.py"
     path.write_text(HOSTILE)
     return path

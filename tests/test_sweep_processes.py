@@ -108,3 +108,31 @@ def test_ctrl_c_during_a_sweep_is_one_line_and_keeps_the_finished_chunks(tmp_pat
     assert str(out / "chunks" / h) in lines[1]
     frame = read_chunk(chunk_path(out, h, 0), stamp_of(h, (0,)), columns(spec))
     assert list(frame["status"]) == ["agree"] and not chunk_path(out, h, 1).exists()
+
+
+def test_an_engine_that_freezes_its_worker_holding_the_gil_is_a_failed_row(tmp_path, hostile):
+    """Main: an engine that holds the interpreter lock forever (here 600 s asleep in C through
+    ctypes.PyDLL) froze the per-bicycle limit's thread with the rest of its worker, and the
+    sweep hung. Seen from the client its task passes its deadline (2 x 2 bicycles x 2 s + 3 s
+    of grace): it is cancelled, its worker process restarted by its nanny, the chunk narrowed
+    down; bicycle 0 agrees, bicycle 1 freezes its worker again alone and is the failed row. The
+    whole takes two deadlines and two worker restarts, far below the 600 s hang."""
+    from distributed import Client, LocalCluster
+
+    from comparisons.stages.sweep_schedule import compute
+    spec = make_spec(load_model("benchmark").params, varies=["m3=80:90:2"],
+                     engines=(f"{hostile}:Freezer",), checks=("terms",), n_states=1)
+    lines: list[str] = []
+    got: dict = {}
+    t = time.perf_counter()
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=50) as cluster, Client(cluster) as client:
+        lost = compute(client, spec, [(0, (0, 1))], 2.0, got.__setitem__, say=lines.append,
+                       grace=3.0)
+    took = time.perf_counter() - t
+    rows = sorted(got[0], key=lambda r: r["bicycle"])
+    assert [r["status"] for r in rows] == ["agree", "failed"], rows
+    assert rows[1]["failures"].startswith("task lost when run alone: TaskOverdue: its worker "
+                                          "froze"), rows[1]["failures"]
+    assert "the worker process was restarted" in rows[1]["failures"], rows[1]["failures"]
+    assert lost == 2 and took < 120, (lost, took, lines)

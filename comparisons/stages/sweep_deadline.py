@@ -12,7 +12,8 @@ worker process ends (a local cluster ends with the sweep). Something an engine r
 that bicycle's failed row too, never the end of the worker.
 
 An engine that holds the interpreter's lock forever (a C loop that never releases the GIL)
-stops the waiting thread as well; it is not covered here.
+stops the waiting thread as well: that case is caught from the client's side, where the task
+passes its deadline and its worker process is restarted (`sweep_schedule`).
 """
 
 from __future__ import annotations

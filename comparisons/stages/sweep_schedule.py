@@ -12,6 +12,14 @@ narrowed down to the bicycle that loses it.
   the sweep in flight, after every other chunk): a bicycle whose lone task is lost again is the
   one that loses it and becomes a "failed" row (``task lost: ...``); the others are computed
   again and keep their results.
+* **A task past its deadline** (its bicycles' limits, ``PER_WORKER`` deep, plus `GRACE`): the
+  per-bicycle limit is kept inside the task (`sweep_deadline`), by a thread that needs the
+  interpreter's lock; an engine that holds it forever (a C loop that never releases the GIL)
+  freezes the whole worker process, its limit and its heartbeats included. Seen from here,
+  such a task never ends: it is cancelled, its worker process restarted through its nanny (a
+  local cluster's, or any ``dask worker`` started with one), and it is lost like the others:
+  narrowed down, and the bicycle that freezes its worker alone is a "failed" row. A cluster of
+  threads (``--processes`` off) has no process to restart: there the sweep cannot be saved.
 * ``on_chunk(i, rows)`` is called once per chunk, with all its rows, as soon as the chunk is
   complete (the sweep writes its file there); ``on_bicycles(n)`` as rows arrive (the progress
   bar).
@@ -27,10 +35,16 @@ from .sweep_deadline import limited_chunk_rows, one_line
 from .sweep_spec import SweepSpec, spec_hash
 from .sweep_task import failed_row
 
-__all__ = ["PER_WORKER", "Work", "compute"]
+__all__ = ["GRACE", "PER_WORKER", "TaskOverdue", "Work", "compute", "deadline"]
 
 PER_WORKER = 2      # tasks in flight per worker: one running, one ready behind it
 POLL = 0.05         # s between two looks at the finished futures (a task takes ~3 s)
+GRACE = 30.0        # s past its bicycles' limits before a task's worker counts as frozen:
+                    # a worker process starting (imports, the generated code: ~3-10 s loaded)
+
+
+class TaskOverdue(Exception):
+    """A task that did not end by its deadline: its worker froze (module docstring)."""
 
 
 @dataclass(frozen=True)
@@ -43,11 +57,13 @@ class Work:
 
 
 def compute(client, spec: SweepSpec, todo, limit: float, on_chunk, on_bicycles=None,
-            task=limited_chunk_rows, check=lambda: None, say=lambda line: None) -> int:
+            task=limited_chunk_rows, check=lambda: None, say=lambda line: None,
+            grace: float = GRACE) -> int:
     """Every chunk of ``todo`` (pairs of chunk number and bicycles) computed on ``client``
     (module docstring); returns how many tasks were lost. ``task``: the Dask task,
     ``task(spec, bicycles, limit) -> rows``; ``check``: called while waiting, raises to stop
-    (`sweep_signals.StopRequest.check`); ``say``: one line for the user per lost task."""
+    (`sweep_signals.StopRequest.check`); ``say``: one line for the user per lost task;
+    ``grace``: seconds past its bicycles' limits before a task's worker counts as frozen."""
     from distributed import as_completed
     h = spec_hash(spec)
     workers = max(1, len(client.scheduler_info(n_workers=-1)["workers"]))
@@ -66,6 +82,7 @@ def compute(client, spec: SweepSpec, todo, limit: float, on_chunk, on_bicycles=N
                 return
 
     flight: dict = {}
+    due: dict = {}                            # future -> monotonic time it must end by
     done = as_completed()
     lost = 0
 
@@ -74,6 +91,8 @@ def compute(client, spec: SweepSpec, todo, limit: float, on_chunk, on_bicycles=N
         f = client.submit(task, spec, w.bicycles, limit, pure=False,
                           key=f"sweep-{h}-{w.chunk:06d}{suffix}")
         flight[f] = w
+        due[f] = time.monotonic() + deadline(len(w.bicycles), limit, 1 if w.alone else PER_WORKER,
+                                                 grace)
         done.add(f)
 
     refill()
@@ -83,9 +102,14 @@ def compute(client, spec: SweepSpec, todo, limit: float, on_chunk, on_bicycles=N
             refill()
         if not flight:                         # every other task finished: one suspect alone
             submit(alone.popleft())
-        for fut in _finished(done, check):
+        for fut, overdue in _finished(done, check, due, client, say):
+            if fut not in flight:              # a cancelled one, already counted
+                continue
             w = flight.pop(fut)
+            due.pop(fut, None)
             try:
+                if overdue is not None:
+                    raise overdue
                 got = fut.result()
             except Exception as exc:           # noqa: BLE001 -- a lost task: narrowed down
                 lost += 1
@@ -113,12 +137,39 @@ def compute(client, spec: SweepSpec, todo, limit: float, on_chunk, on_bicycles=N
     return lost
 
 
-def _finished(done, check, poll: float = POLL):
-    """The futures finished so far (at least one), waiting in steps of ``poll`` seconds and
-    calling ``check()`` between them (it raises to stop: `sweep_signals`)."""
+def deadline(n_bicycles: int, limit: float, depth: int, grace: float = GRACE) -> float:
+    """Seconds a task of ``n_bicycles`` may take from its submission: each bicycle's
+    ``limit``, behind at most ``depth`` tasks like it on its worker, plus ``grace``."""
+    return depth * n_bicycles * limit + grace
+
+
+def _finished(done, check, due: dict, client, say, poll: float = POLL) -> list[tuple]:
+    """(future, None) for the futures finished so far, or (future, `TaskOverdue`) for those past
+    their deadline in ``due`` (cancelled, their workers restarted); at least one. Waits in steps
+    of ``poll`` seconds, calling ``check()`` between them (it raises to stop:
+    `sweep_signals`)."""
     while True:
         check()
         batch = done.next_batch(block=False)
         if batch:
-            return batch
+            return [(f, None) for f in batch]
+        now = time.monotonic()
+        late = [f for f, at in due.items() if now > at and not f.done()]
+        if late:
+            return [(f, _abandon(client, f, say)) for f in late]
         time.sleep(poll)
+
+
+def _abandon(client, fut, say) -> TaskOverdue:
+    """Cancel ``fut`` and restart the worker process running it (it froze: module docstring)."""
+    where = [w for w, keys in client.processing().items() if fut.key in keys]
+    client.cancel(fut)
+    why = "its worker froze (no reply by its deadline: an engine holding the interpreter lock?)"
+    if where:
+        try:
+            client.restart_workers(where, timeout=60)
+            why += "; the worker process was restarted"
+        except Exception as exc:   # noqa: BLE001 - a worker with no nanny: said, not hidden
+            why += f"; its worker could not be restarted ({one_line(exc)})"
+    say(f"sweep: task {fut.key} {why}")
+    return TaskOverdue(why)
