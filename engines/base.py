@@ -88,9 +88,12 @@ class Engine:
     run_difference: str | None = None
 
     # -- the engine's facts (`engines.facts`; docs/engines.md, "An engine's facts") ----------
-    #: how reports and figures name and draw the engine ("" : its registered name)
+    #: how reports and figures name and draw the engine ("" : its registered name); a
+    #: matplotlib colour and marker (None: one of `comparisons.report.styles`' fallbacks,
+    #: distinct from every declared one)
     label: str = ""
     colour: str | None = None
+    marker: str | None = None
     #: the table of tolerances.toml judging its forward runs against the reference's, or None
     #: when a study it contributes judges them (say which in ``trajectory_judged_by``)
     trajectory_tolerance: str | None = "trajectory_conformance"

@@ -4,7 +4,7 @@ Everything the harness needs to know about one engine beyond its methods is a cl
 of its `engines.base.Engine` subclass, typed by the dataclasses here, and read through
 `engine_facts` (the harness never names an engine; docs/engines.md, "An engine's facts"):
 
-* ``label``, ``colour``: how reports and figures name and draw it;
+* ``label``, ``colour``, ``marker``: how reports and figures name and draw it;
 * ``contacts``, ``run_difference``: the front contacts it models, and a declared model
   difference of its forward runs (e.g. a soft wheel-ground contact);
 * ``trajectory_tolerance``: the table of ``tolerances.toml`` that judges its forward runs
@@ -133,6 +133,7 @@ class EngineFacts:
     spec: str
     label: str
     colour: str | None
+    marker: str | None
     capabilities: frozenset[str]
     contacts: tuple[str, ...]
     run_difference: str | None
@@ -169,6 +170,7 @@ def engine_facts(spec: str) -> EngineFacts:
         name=name, spec=spec,
         label=getattr(cls, "label", "") or name,
         colour=getattr(cls, "colour", None),
+        marker=getattr(cls, "marker", None),
         capabilities=frozenset(getattr(cls, "capabilities", ())),
         contacts=tuple(getattr(cls, "contacts", ())),
         run_difference=getattr(cls, "run_difference", None),

@@ -15,6 +15,7 @@ class ReferenceEngine(Engine):
     capabilities = frozenset(CAPABILITIES)
     label = "reference"
     colour = "k"
+    marker = "o"
     trajectory_tolerance = None   # everything else is compared against it
     trajectory_judged_by = "it is the reference"
     run_setups = (RunSetup(settings="inverse: inverse kinematics DOP853 rtol 1e-12 + 13x13 LU; "

@@ -98,7 +98,16 @@ def _verdict_words(report: str) -> set[str]:
             header = cells
         elif not set("".join(cells)) <= set("-: "):
             for name, cell in zip(header, cells):
-                if name in ("verdict", "as expected", "detected"):
+                if re.search(r"\[\^[ct]\d+-\d+\]$", cell) or name == "agreement":
+                    # a cell of the claims or summary matrix (its footnote): 'reproduced',
+                    # 'pass 8.3e-04', 'model difference: partly'; the claims' agreement
+                    cell = re.sub(r"\[\^[ct]\d+-\d+\]$", "", cell)
+                    cell = re.sub(r" [-+]?\d\.\de[-+]\d+$", "", cell)
+                    if cell.startswith("model difference: "):
+                        words.add("model difference: <verdict>")
+                        cell = cell.removeprefix("model difference: ")
+                    words.add(re.sub(r" \(\d+ of \d+\)$", "", cell))
+                elif name in ("verdict", "as expected", "detected"):
                     # 'pass: why' or 'reported: who judges it': the word is before the reason
                     word = cell.split(": ", 1)[0]
                     words.add(re.sub(r" \(\d+ of \d+\)$", "", word))

@@ -69,8 +69,8 @@ def _visible(fragment: str) -> str:
     return htmllib.unescape(re.sub(r"<[^>]+>", "", fragment))
 
 
-def _cells(page: str) -> list[str]:
-    return [_visible(c) for c in re.findall(r"<td[^>]*>(.*?)</td>", page, flags=re.S)]
+def _cells(page: str, tag: str = "td") -> list[str]:
+    return [_visible(c) for c in re.findall(rf"<{tag}[^>]*>(.*?)</{tag}>", page, flags=re.S)]
 
 
 def test_planted_harness_text_renders_literally():
@@ -78,9 +78,10 @@ def test_planted_harness_text_renders_literally():
     kg*m^2`` as italics and this fails; so does a ``_blocks`` that writes headings raw."""
     _, page = _rendered()
     cells = _cells(page)
-    assert EVIDENCE in cells                                   # the claim's evidence cell
+    # the claim's evidence: the details of its matrix cell (after the verdict and "evidence")
+    assert any(c.endswith(f"c / {PLANTED['engine']}: {EVIDENCE}") for c in cells), cells
     assert PLANTED["cell"] in cells                            # pipe and asterisks, one cell
-    assert PLANTED["engine"] in cells
+    assert PLANTED["engine"] in _cells(page, "th")             # the claims matrix's column
     visible = _visible(page)
     for text in (PLANTED["evidence"], PLANTED["reason"], PLANTED["heading"], PLANTED["line"]):
         assert text in visible, text
@@ -89,7 +90,7 @@ def test_planted_harness_text_renders_literally():
     assert "<em>" not in page and "<a href=\"http" not in page and "<img" not in page
     assert "<b>" not in page                                   # raw HTML stays text
     assert not re.search(r"<h\d[^>]*>[^<]*not a heading", page)
-    assert "<ol" not in page
+    assert re.findall(r"<ol[^>]*>", page) == ['<ol class="footnotes-list">']  # the cells' notes
 
 
 def test_the_writers_own_formatting_still_renders():

@@ -5,7 +5,8 @@ it needs); `save_figure` draws it and writes the PNG atomically, quantized to a 
 palette (line plots lose nothing visible and the files shrink about threefold). Conventions:
 every axis carries its unit; a difference of round-off size is drawn as a difference on a log
 scale, never as a signal with an offset; each engine has one fixed style in every figure,
-its declared colour with a line style per run setup (`comparisons.report.styles`), and a
+its colour and marker (declared, or a fallback no other engine has) with a line style per run
+setup (`comparisons.report.styles`), and a
 drawing names runs and engines only from its data (the curves' keys are run labels; an axis
 that names the engine compared takes it as ``engine_label``).
 """
@@ -20,7 +21,7 @@ import numpy as np
 
 from reference_model import CONSTRAINT_NAMES, TORQUE_NAMES
 
-from .styles import style_of
+from .styles import mark_of, style_of
 
 WIDTH = 10.0        # inches at DPI: the figures fill the report's content width
 DPI = 80
@@ -83,7 +84,7 @@ def error_vs_time(curves, horizon, threshold, title, engine_label="engine"):
     fig, ax = plt.subplots(figsize=(WIDTH, 3.6))
     for lab, c in curves.items():
         _semilogy(ax, c["t"], c["theta"], label=f"{lab}: theta [rad]", **style_of(lab))
-        _semilogy(ax, c["t"], c["xc"], label=f"{lab}: xc [m]", color=style_of(lab).get("color"),
+        _semilogy(ax, c["t"], c["xc"], label=f"{lab}: xc [m]", **mark_of(lab),
                   ls="-", lw=0.6, alpha=0.6)
     ax.axhline(threshold, color="grey", lw=0.8)
     ax.set_xlabel("t [s]")
@@ -140,9 +141,9 @@ def error_panels(panels, threshold, engine_label="engine"):
     for ax, p in zip(axes[:, 0], panels):
         for lab, c in p["curves"].items():
             _semilogy(ax, c["t"], c["theta"], label=f"{lab}: theta [rad]", lw=0.9,
-                      color=style_of(lab).get("color"))
+                      **mark_of(lab))
             _semilogy(ax, c["t"], c["max"], label=f"{lab}: max over q [rad or m]", ls=":", lw=1.1,
-                      color=style_of(lab).get("color"))
+                      **mark_of(lab))
         ax.axhline(threshold, color="grey", lw=0.8)
         ax.set_ylim(bottom=1e-12)
         ax.set_ylabel(f"|{engine_label} - ref|\n[rad or m]")

@@ -22,6 +22,7 @@ from __future__ import annotations
 import base64
 import html
 import os
+import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +31,7 @@ from urllib.parse import unquote
 from markdown_it import MarkdownIt
 from markdown_it.token import Token
 from mdit_py_plugins.anchors import anchors_plugin
+from mdit_py_plugins.footnote import footnote_plugin
 
 __all__ = ["CSS", "TocEntry", "markdown_to_html", "write_html"]
 
@@ -48,7 +50,7 @@ _VERDICT_CLASS = {
     "detected, mislocalized": "fail", "failed": "fail",
     "partly": "partly", "inconclusive": "partly",
     "reported": "info", "not assessed": "info", "not observable": "info",
-    "model difference": "info",
+    "model difference": "info", "agree": "pass", "differ": "partly",
 }
 
 CSS = """
@@ -85,6 +87,10 @@ td.pass { background: #e3f4e3 !important; }
 td.fail { background: #f8d7d7 !important; font-weight: bold; }
 td.partly { background: #fff4d6 !important; }
 td.info { background: #e8eef8 !important; }
+details.evidence { font-size: 12px; color: var(--muted); font-weight: normal; }
+details.evidence summary { cursor: pointer; }
+details.evidence[open] { min-width: 18rem; max-width: 32rem; }
+details.evidence p { margin: .2rem 0; }
 code { font-family: ui-monospace, "DejaVu Sans Mono", monospace; background: #f3f3f3;
        padding: 0 3px; border-radius: 3px; font-size: 92%; }
 pre { background: #f3f3f3; padding: .6rem .8rem; overflow-x: auto; border-radius: 3px; }
@@ -105,8 +111,17 @@ class TocEntry:
     text: str
 
 
+#: what a matrix cell adds after its verdict: footnote references, the error relative to the
+#: tolerance ("pass 8.3e-04")
+_CELL_TAIL = re.compile(r"(?:\s*\[\^[^\]\s]+\])+$|\s+[-+]?\d(?:\.\d+)?e[-+]\d+$")
+
+
 def _verdict_class(text: str) -> str | None:
     words = " ".join(text.split()).lower()
+    while _CELL_TAIL.search(words):
+        words = _CELL_TAIL.sub("", words)
+    if words.startswith("model difference"):   # a claims cell judged under one: never a failure
+        return "info"
     if words in _VERDICT_CLASS:
         return _VERDICT_CLASS[words]
     if words.startswith("fail ("):       # the summary's "FAIL (2 of 5)"
@@ -137,6 +152,7 @@ def _parser(base: Path) -> MarkdownIt:
     """CommonMark + GFM tables, raw HTML escaped, anchors on every heading, our render rules."""
     md = MarkdownIt("commonmark", {"html": False}).enable(["table", "strikethrough"])
     anchors_plugin(md, min_level=1, max_level=6, permalink=True, permalinkSymbol="#")
+    footnote_plugin(md)
 
     def image(self, tokens: list[Token], idx: int, options, env) -> str:
         token = tokens[idx]
@@ -156,11 +172,37 @@ def _parser(base: Path) -> MarkdownIt:
             tokens[idx].attrSet("class", cls)
         return self.renderToken(tokens, idx, options, env)
 
+    def footnote_ref(self, tokens, idx, options, env) -> str:
+        """A footnote reference (a matrix cell's evidence) as a ``<details>`` holding the
+        footnote's text, so the evidence opens in place, one click away; the footnotes
+        stay listed at the end as well."""
+        text = env.get("footnote_html", {}).get(tokens[idx].meta["id"])
+        if text is None:
+            return default_ref(tokens, idx, options, env)
+        return f'<details class="evidence"><summary>evidence</summary>{text}</details>'
+
+    default_ref = md.renderer.rules["footnote_ref"]
+
     md.add_render_rule("image", image)
+    md.add_render_rule("footnote_ref", footnote_ref)
     md.add_render_rule("table_open", table_open)
     md.add_render_rule("table_close", table_close)
     md.add_render_rule("td_open", td_open)
     return md
+
+
+def _footnote_html(md: MarkdownIt, tokens: list[Token], env: dict) -> dict[int, str]:
+    """Each footnote's text as HTML (without its back-reference), by its id: what a cell's
+    ``<details>`` shows."""
+    out, start = {}, None
+    for i, tok in enumerate(tokens):
+        if tok.type == "footnote_open":
+            start = i
+        elif tok.type == "footnote_close" and start is not None:
+            inner = [t for t in tokens[start + 1:i] if t.type != "footnote_anchor"]
+            out[tokens[start].meta["id"]] = md.renderer.render(inner, md.options, env).strip()
+            start = None
+    return out
 
 
 def _toc(tokens: list[Token]) -> list[TocEntry]:
@@ -215,6 +257,7 @@ def markdown_to_html(markdown: str, base: Path, title: str = "bicycle-xval repor
     md = _parser(Path(base))
     env: dict = {}
     tokens = md.parse(markdown, env)
+    env["footnote_html"] = _footnote_html(md, tokens, env)
     body = md.renderer.render(tokens, md.options, env)
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"

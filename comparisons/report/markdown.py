@@ -1,5 +1,6 @@
 """report.md from a `ComparisonResult`: the verdict first, then failures (if any) and the
-thesis's claims, then the summary table, then every section's details.
+thesis's claims (claim x engine), then the summary (quantity x engine), then every section's
+details, and last the footnotes that hold each matrix cell's evidence (`matrix`).
 
 How to read each section and verdict: docs/report.md.
 
@@ -17,6 +18,7 @@ import re
 import string
 
 from ..stages.results import Figure, Heading, Section, Table, Text, num
+from .matrix import Matrix, claims_matrix, term_matrix
 
 __all__ = ["Markdown", "cell", "code", "escape", "inline", "md", "render", "table"]
 
@@ -218,27 +220,70 @@ def _failures(summary: dict, localization) -> list[str]:
     return out
 
 
-def _claims(summary: dict) -> list[str]:
+#: a footnote of a matrix cell: its label, the row's and column's names, the evidence lines
+Note = tuple[str, str, str, tuple[str, ...]]
+
+
+def _cells(m: Matrix, prefix: str, notes: list[Note], text) -> list[list]:
+    """Each cell of ``m`` as its ``text(cell)`` with a footnote to its evidence (appended to
+    ``notes``), or ``-`` where no row is."""
+    out = []
+    for i, (row, cells) in enumerate(zip(m.rows, m.cells)):
+        line = []
+        for j, (column, c) in enumerate(zip(m.columns, cells)):
+            if c is None:
+                line.append("-")
+                continue
+            key = f"{prefix}{i + 1}-{j + 1}"
+            notes.append((key, row, column, c.evidence))
+            line.append(Markdown(inline(text(c)) + f"[^{key}]"))
+        out.append(line)
+    return out
+
+
+def _claims(summary: dict, notes: list[Note]) -> list[str]:
     if not summary["claims"]:
         return []
+    m = claims_matrix(summary["claims"])
+    cells = _cells(m, "c", notes, lambda c: c.verdict)
     return ["## The thesis's claims, engine by engine", "",
-            "Each claim is the thesis's sentence; the evidence gives the numbers and the "
-            "threshold that turned them into the verdict.", ""] + table(
-        ("claim", "engine", "verdict", "evidence"),
-        [(c["claim"], c["engine"], c["verdict"], c["evidence"]) for c in summary["claims"]])
+            "Each row is the thesis's sentence, each column an engine's runs; the footnote of a "
+            "cell gives the numbers and the threshold that turned them into its verdict. "
+            "`model difference: ...`: judged on runs of an engine that declares a model "
+            "difference (a soft contact, not ideal rolling): shown, never a failure. "
+            "`agreement`: whether the engines judged without one agree (`differ` names a "
+            "disagreement; `-`: none judged).", ""] + table(
+        ("claim", *m.columns, "agreement"),
+        [(row, *line, agree) for row, line, agree in zip(m.rows, cells, m.agreement)])
 
 
-def _summary_table(summary: dict) -> list[str]:
-    rows = []
-    for r in summary["summary_table"]:
-        tol = r["tolerance"] if isinstance(r["tolerance"], str) else num(r["tolerance"])
-        verdict = r["verdict"] + (f": {r['reason']}" if r.get("reason") else "")
-        rows.append((r["quantity"], r["engines"], r["n"], num(r["max_error"]), tol, verdict,
-                     r["worst"]))
-    return ["## Summary: quantity x engine pair", ""] + table(
-        ("quantity", "engines", "comparisons", "max error", "tolerance", "verdict", "worst at"),
-        rows, note="Errors are relative to the scale each tolerance names (absolute for "
-                   "trajectories, in rad or m, and for constraint residuals, in m or m/s).")
+def _term_text(c) -> str:
+    return c.verdict if c.ratio is None else f"{c.verdict} {c.ratio:.1e}"
+
+
+def _summary_table(summary: dict, notes: list[Note]) -> list[str]:
+    m = term_matrix(summary["comparisons"], summary["engines"])
+    if not m.rows:
+        return []
+    cells = _cells(m, "t", notes, _term_text)
+    return ["## Summary: quantity x engine", ""] + table(
+        ("quantity", *m.columns), [(row, *line) for row, line in zip(m.rows, cells)],
+        note="Each cell: every comparison of the quantity on that engine (its run setups, "
+             "variants and bicycles), `FAIL (k of n)` if any judged one failed, else `pass`, "
+             "else `reported` (or `model difference`: declared, not judged), and the worst "
+             "error divided by its tolerance (1 is the tolerance; errors relative to the "
+             "scale each tolerance names, absolute for trajectories and constraint "
+             "residuals). Its footnote lists the engine pairs behind it; every row is in its "
+             "section below and in summary.json (`summary_table`, `comparisons`).")
+
+
+def _notes(notes: list[Note]) -> list[str]:
+    """The matrices' footnotes, at the end (where GitHub and the HTML list them too)."""
+    if not notes:
+        return []
+    return ["", "## Evidence of the matrices' cells", ""] + [
+        f"[^{key}]: " + md("{} / {}: {}", row, column, "; ".join(evidence))
+        for key, row, column, evidence in notes]
 
 
 def _reference(summary: dict) -> list[str]:
@@ -293,10 +338,12 @@ def _code_line(p: dict | None) -> list[str]:
 def render(result) -> str:
     """The whole report.md of a `comparisons.stages.pipeline.ComparisonResult`."""
     s = result.summary
+    notes: list[Note] = []
     lines = ["# bicycle-xval report", ""]
-    lines += _verdict(s) + _failures(s, result.localization) + _claims(s) + _summary_table(s)
+    lines += (_verdict(s) + _failures(s, result.localization) + _claims(s, notes)
+              + _summary_table(s, notes))
     lines += _reference(s)
     for sec in result.sections:
         lines += _blocks(sec, 2)
-    lines += _tail(s)
+    lines += _tail(s) + _notes(notes)
     return "\n".join(lines).rstrip("\n") + "\n"

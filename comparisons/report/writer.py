@@ -19,6 +19,7 @@ import numpy as np
 
 from ..judgments.rows import Comparison
 from . import figures, frames, markdown
+from .matrix import claims_matrix, term_matrix
 from ..stages.files import ReportFolder, write_bytes, write_csv, write_text
 from .html import write_html
 
@@ -33,6 +34,14 @@ def _json_default(x):
     if isinstance(x, np.bool_):
         return bool(x)
     return str(x)
+
+
+def with_matrices(summary: dict) -> dict:
+    """``summary`` with its two matrices added under keys of their own (``claims_matrix``,
+    ``term_matrix``: rows, columns, cells; `matrix.Matrix.as_dict`): the rows they are built
+    from stay as they were, under their own keys."""
+    return {**summary, "claims_matrix": claims_matrix(summary["claims"]).as_dict(),
+            "term_matrix": term_matrix(summary["comparisons"], summary["engines"]).as_dict()}
 
 
 def draw_figures(result, workers: int | None = None) -> dict[str, bytes]:
@@ -65,7 +74,8 @@ def write_report(result, out: Path, data: bool = True, html: bool = True,
                 if run.t.size:
                     write_csv(frames.run_frame(run), root / "data" / f"{name}_{label}.csv")
         write_text(root / "summary.json",
-                   json.dumps(result.summary, indent=1, default=_json_default) + "\n")
+                   json.dumps(with_matrices(result.summary), indent=1, default=_json_default)
+                   + "\n")
         write_text(root / "report.md", markdown.render(result))
         if html:
             write_html(root / "report.md")

@@ -322,6 +322,10 @@ def run_comparison(opts: Options, progress: Callable[[str], None] = lambda s: No
                                  f"summary.json's {k!r}")
             stage_keys[k] = stage.name
         extra_summary.update(part.summary)
+    # each claim says whether its engine's runs carry a declared model difference (a soft
+    # contact): the report shows such a verdict as that, never as a failure
+    difference = {st.label: plan.facts[st.engine].run_difference for st in setups}
+    claims = [{**c, "model_difference": difference.get(c["engine"])} for c in claims]
 
     comparisons = [c for s in sections for c in s.comparisons]
     stray = [c for c in comparisons if not isinstance(c, Comparison)]

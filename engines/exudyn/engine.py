@@ -361,6 +361,7 @@ class ExudynEngine(Engine):
     capabilities = frozenset({"mass_matrix", "generalized_forces", "simulate"})
     label = "Exudyn"
     colour = "tab:blue"
+    marker = "^"
     #: a fixed-step integrator: its runs are reported against the reference, and judged by
     #: their convergence order (the fixed-step study, `fixed_step` below)
     trajectory_tolerance = None

@@ -171,6 +171,7 @@ class KaneEngine(Engine):
     contacts = ("disc",)
     label = "Kane"
     colour = "tab:purple"
+    marker = "D"
     #: the reference's own solvers on Kane's equations: judged to [trajectory]
     trajectory_tolerance = "trajectory"
     run_setups = (RunSetup(kinds=("forward",),

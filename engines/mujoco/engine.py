@@ -90,6 +90,7 @@ class MujocoEngine(Engine):
                       "slip, sink and can lift off)")
     label = "MuJoCo"
     colour = "tab:red"
+    marker = "v"
     run_setups = (RunSetup(kinds=("forward",), settings=(
         f"MuJoCo's own soft wheel-ground contact (disc-contact models only): cylinders on a "
         f"plane, {DEFAULTS.cone} cone, condim {DEFAULTS.condim}, solref "

@@ -179,6 +179,7 @@ class PinocchioEngine(Engine):
     capabilities = frozenset(CAPABILITIES)
     label = "Pinocchio"
     colour = "tab:orange"
+    marker = "s"
     #: the reference's own solvers on Pinocchio's terms: judged to [trajectory]
     trajectory_tolerance = "trajectory"
     run_setups = (RunSetup(settings="the reference's solvers on Pinocchio's crba, rnea and frame "
