@@ -65,7 +65,7 @@ class DartEngine(Engine):
         f"{DEFAULTS.wheel_half_width:g} m on a ground box, {DEFAULTS.collision_detector} collision "
         f"detector, {DEFAULTS.solver} boxed LCP, friction {DEFAULTS.friction:g}, time step "
         f"{DEFAULTS.timestep:g} s (semi-implicit Euler)")),)
-    costs = Costs(run_per_second=6.0, short_run=0.8, terms=1.5, faults=2.0)
+    costs = Costs(run_per_second=1.0, short_run=0.8, terms=2.5, faults=3.0)
     soft_contact = SOFT_CONTACT
     #: the conformance checks DART is expected to fail, with the reason (read by the plugin)
     conformance_xfails = Path(__file__).with_name("conformance_xfails.txt")
@@ -117,14 +117,14 @@ class DartEngine(Engine):
 
     # -- rolling constraints -----------------------------------------------------------
     def constraint_residual(self, q, dq):
-        return _each(lambda a, b: self._terms.kinematics(a, b, np.zeros(3), False).C, 2, q, dq)
+        return _each(lambda a, b: self._terms.kinematics(a, b, (), False, False).C, 2, q, dq)
 
     def constraint_jacobian(self, q):
-        return _each(lambda a: self._terms.kinematics(a, np.zeros(N_Q), np.zeros(3), False).D,
+        return _each(lambda a: self._terms.kinematics(a, np.zeros(N_Q), (), False, False).D,
                      1, q)
 
     def constraint_bias(self, q, dq):
-        return _each(lambda a, b: self._terms.kinematics(a, b, np.zeros(3), True).bias, 2, q, dq)
+        return _each(lambda a, b: self._terms.kinematics(a, b, (), True, False).bias, 2, q, dq)
 
     # -- the thesis's constrained system on DART's terms ----------------------------------
     def _forward_one(self, q, dq, T, a1, a2):
