@@ -43,8 +43,8 @@ def conclusion(studies, s: dict) -> str:
     main = studies[0]
     text = (f"**Conclusion.** DART's rigid LCP contact has no stiffness to refine: its departure "
             f"from rolling is the time stepping's. With the time step, DART {main.verdict} "
-            f"({main.verdict_reason}; order {main.order:.2f}), its slip RMS "
-            f"{main.slip_rms[-1]:.2e} m/s at {main.values[-1]:g} s.")
+            f"({main.verdict_reason}); its slip RMS is {main.slip_rms[-1] / main.values[-1]:.2f} x "
+            f"the step (m/s per s), the contact point's acceleration times the step.")
     by_width = [st for st in studies[1:] if st.parameter.startswith("wheel half-width")]
     if by_width:
         st = by_width[0]
