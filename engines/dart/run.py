@@ -35,6 +35,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
+from ..stepping import forward_grid
 from .options import RunSettings
 from .world import build_world
 
@@ -43,6 +44,9 @@ import dartpy as dart
 __all__ = ["simulate"]
 
 THETA = 3
+#: the columns of a sample's diagnostics row (rear wheel, front wheel, normal forces)
+DIAGNOSTICS = ("slip_speed_rear", "penetration_rear", "slip_speed_front", "penetration_front",
+               "normal_force_rear", "normal_force_front")
 #: options of the reference's simulate that have no meaning here; accepted and recorded
 REFERENCE_ONLY = ("rtol", "atol", "constraints", "baumgarte")
 
@@ -78,17 +82,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     progress = options.pop("progress", None)
     ignored = {k: options.pop(k) for k in REFERENCE_ONLY if k in options}
     s = _settings_of(engine, options)
-    if not (isinstance(fall_limit, (int, float)) and math.isfinite(fall_limit) and fall_limit > 0):
-        raise EngineUsageError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
-    if scenario.kind != "forward":
-        raise EngineUsageError(f"scenario {scenario.name!r} is an inverse scenario; DART runs only "
-                               "forward scenarios")
+    grid, fall_limit = forward_grid(scenario, fall_limit, t_end, "DART")
     model = engine.model
-    grid = scenario.t
-    if t_end is not None:
-        grid = grid[grid <= float(t_end) + 1e-12]
-        if grid.size < 2:
-            raise EngineUsageError(f"t_end = {t_end!r} leaves fewer than 2 grid samples")
     h = s.timestep
     per = _steps_per_sample(h, float(grid[1] - grid[0]))
     n_steps = per * (grid.size - 1)
@@ -146,7 +141,7 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     solve_seconds = time.perf_counter() - solve0
 
     q, dq = np.array(rows["q"]), np.array(rows["dq"])
-    diag = np.array(rows["diag"], dtype=float).reshape(-1, 6)
+    diag = np.array(rows["diag"], dtype=float).reshape(-1, len(DIAGNOSTICS))
     return Trajectory(
         t=np.array(rows["t"]), q=q, dq=dq, ddq=np.array(rows["ddq"]),
         C=model.constraint_residual(q, dq).reshape(-1, 5), T=np.array(rows["T"]),
@@ -163,7 +158,7 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
             "rear_height_joint": ("zc, a prismatic z joint after yc (free: the rear wheel rests "
                                   "on its contact)"),
             "loads": "rider torques and drag as external forces, set before each step",
-            "fall_limit": float(fall_limit),
+            "fall_limit": fall_limit,
             "grid": f"scenario grid (every {per} steps)",
             "ddq": "the velocity change of the step ending at each sample, over the step",
             "C": "reference model's constraint_residual on the DART states",
@@ -174,7 +169,5 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
         },
         timing={"wall_seconds": time.perf_counter() - wall0, "solve_seconds": solve_seconds,
                 "steps": k},
-        diagnostics={"slip_speed_rear": diag[:, 0], "penetration_rear": diag[:, 1],
-                     "slip_speed_front": diag[:, 2], "penetration_front": diag[:, 3],
-                     "normal_force_rear": diag[:, 4], "normal_force_front": diag[:, 5]},
+        diagnostics=dict(zip(DIAGNOSTICS, diag.T)),
     )
