@@ -117,25 +117,29 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     if abs(init.q[THETA]) >= fall_limit:
         status, n_steps = "fell", 0
         message = f"|theta| = {abs(init.q[THETA]):.3f} rad >= fall limit at the start"
+    bike, step, i_theta = rw.bike, rw.world.step, int(rw.map.dof[4])
+    T_list = np.asarray(T_steps).tolist()
     while k < n_steps:
-        v0 = rw.map.from_dart(rw.bike.getVelocities())
-        rw.loads(T_steps[k])
-        rw.world.step()
+        v0 = bike.getVelocities()
+        rw.loads(T_list[k])
+        step()
         k += 1
-        v1 = rw.map.from_dart(rw.bike.getVelocities())
-        theta = rw.bike.getPosition(int(rw.map.dof[4]))
-        if not (np.isfinite(v1).all() and math.isfinite(theta)):
+        theta = bike.getPosition(i_theta)
+        at_sample = k % per == 0
+        if not math.isfinite(theta) or ((at_sample or abs(theta) >= fall_limit)
+                                        and not np.isfinite(bike.getVelocities()).all()):
             status = "failed"
             message = (f"DART's state became non-finite between t = {t_steps[k - 1]:.6f} and "
                        f"{t_steps[k]:.6f} s; the run ends at the last sample before")
             break
         if abs(theta) >= fall_limit:
-            sample(float(t_steps[k]), T_steps[k], (v1 - v0) / h)
+            sample(float(t_steps[k]), T_steps[k], rw.map.from_dart(bike.getVelocities() - v0) / h)
             status = "fell"
             message = f"|theta| reached the fall limit {fall_limit:.4f} rad at t = {t_steps[k]:.6f} s"
             break
-        if k % per == 0:
-            sample(float(grid[k // per]), T_steps[k], (v1 - v0) / h)
+        if at_sample:
+            sample(float(grid[k // per]), T_steps[k],
+                   rw.map.from_dart(bike.getVelocities() - v0) / h)
             if progress is not None:
                 progress(float(grid[k // per]))
     solve_seconds = time.perf_counter() - solve0

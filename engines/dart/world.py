@@ -21,6 +21,8 @@ contact point (error 1.07e-3 at hw = 1e-4 m, 4.3e-4 at 1e-6 m).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from reference_model.parameters.values import Parameters
@@ -57,13 +59,14 @@ class RunWorld:
         """Rider torques about body axes (steer z of the fork, pedal y of the rear wheel,
         anti-roll x of the frame, each on its body alone) and the drag -cv |vG3| vG3 at the
         frame's CoM, as DART external forces for the next step (DART clears them after it)."""
-        self.fork.setExtTorque(T[0] * self.fork.getWorldTransform().rotation()[:, 2], False)
-        self.rear.setExtTorque(T[1] * self.rear.getWorldTransform().rotation()[:, 1], False)
+        T0, T1, T2 = T
+        self.fork.setExtTorque(np.array([0.0, 0.0, T0]), True)      # in the body's own axes
+        self.rear.setExtTorque(np.array([0.0, T1, 0.0]), True)
         # setExtForce replaces the body's whole external wrench (its moment by offset x force),
         # so the frame's force comes first and its torque is added after
         v = self.frame.getLinearVelocity(self.com3, self.W, self.W)
-        self.frame.setExtForce(-self.cv * np.linalg.norm(v) * v, self.com3, False, True)
-        self.frame.addExtTorque(T[2] * self.frame.getWorldTransform().rotation()[:, 0], False)
+        self.frame.setExtForce(-self.cv * math.sqrt(v @ v) * v, self.com3, False, True)
+        self.frame.addExtTorque(np.array([T2, 0.0, 0.0]), True)
 
     def wheel_contact(self, name: str) -> tuple[float, float]:
         """(slip speed m/s, penetration m) of wheel ``name``'s knife-edge disc at its lowest
