@@ -1,0 +1,29 @@
+"""The checked inputs of an engine's own time loop (a simulator stepping a scenario itself
+rather than through the reference's solvers): the output grid up to ``t_end`` and the fall
+limit, each refused in one line naming the option when it cannot be used."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .base import EngineUsageError
+
+__all__ = ["forward_grid"]
+
+
+def forward_grid(scenario, fall_limit, t_end, who: str) -> tuple[np.ndarray, float]:
+    """(the scenario's grid cut at ``t_end`` (None: the whole grid), the fall limit in rad);
+    ``who`` names the engine in the messages."""
+    if not (isinstance(fall_limit, (int, float)) and math.isfinite(fall_limit) and fall_limit > 0):
+        raise EngineUsageError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
+    if scenario.kind != "forward":
+        raise EngineUsageError(f"scenario {scenario.name!r} is an inverse scenario; {who} runs "
+                               "only forward scenarios")
+    grid = scenario.t
+    if t_end is not None:
+        grid = grid[grid <= float(t_end) + 1e-12]
+        if grid.size < 2:
+            raise EngineUsageError(f"t_end = {t_end!r} leaves fewer than 2 grid samples")
+    return grid, float(fall_limit)
