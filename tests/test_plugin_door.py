@@ -158,3 +158,41 @@ def test_diagnose_against_another_engine(capsys):
     text = capsys.readouterr().out
     assert "against engine pinocchio" in text
     assert "localized: Qv via gyroscopic terms w x (I w) (all bodies)" in text
+
+
+COUNTING = """
+import atexit
+from pathlib import Path
+from engines.reference import ReferenceEngine
+
+CALLS = [0]
+atexit.register(lambda: Path(__file__).with_suffix(".calls").write_text(str(CALLS[0])))
+
+class Counting(ReferenceEngine):
+    name = "counting"
+
+    def mass_matrix(self, q):
+        CALLS[0] += 1
+        return super().mass_matrix(q)
+"""
+
+
+@pytest.mark.slow
+def test_the_quick_depth_checks_fewer_states_and_one_trajectory_model(tmp_path):
+    """--conformance-depth quick (make test's): each term at 5 hypothesis states, not 25, and
+    the forward runs on thesis-disc only; the default is the full depth an engine author runs.
+    Counted by an engine that counts its calls (one per state) and by the collected ids."""
+    engine = tmp_path / "counting.py"
+    engine.write_text(COUNTING)
+    calls = {}
+    for depth in ("quick", "full"):
+        got = _pytest("--engine", f"{engine}:Counting", "--model", "thesis-disc", "-k",
+                      "hypothesis_states and mass_matrix", "--conformance-depth", depth,
+                      cwd=tmp_path)
+        assert got.returncode == 0, got.stdout[-2000:]
+        calls[depth] = int(engine.with_suffix(".calls").read_text())
+    assert calls == {"quick": 5, "full": 25}, calls
+    ids = {d: _pytest("--engine", FILE_SPEC, "--collect-only", "-k", "meaningful_horizon",
+                      "--conformance-depth", d, cwd=tmp_path).stdout for d in ("quick", "full")}
+    assert "thesis-disc-replay" in ids["quick"] and "general-replay" not in ids["quick"]
+    assert "general-replay" in ids["full"], ids["full"][-2000:]

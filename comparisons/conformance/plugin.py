@@ -34,6 +34,18 @@ class Candidate:
         return f"{label_of(self.spec)}-{self.model_name}"
 
 
+@dataclass(frozen=True)
+class Depth:
+    """How many cases a session checks: ``examples`` hypothesis states per term check, and the
+    models of the forward runs (None: `models.DEFAULT_TRAJECTORY_MODELS`)."""
+
+    examples: int
+    trajectory_models: tuple[str, ...] | None = None
+
+
+DEPTHS = {"full": Depth(25), "quick": Depth(5, ("thesis-disc",))}
+
+
 @dataclass
 class Conformance:
     """What this session checks: the candidates (engine x model) and the expected failures."""
@@ -42,6 +54,7 @@ class Conformance:
     models: list[str]
     options: dict
     tolerances: object = None        # judgments.tolerances.Tolerances: what the checks judge by
+    depth: Depth = DEPTHS["full"]
     candidates: list[Candidate] = field(default_factory=list)
     xfails: dict[str, str] = field(default_factory=dict)
     _models: dict = field(default_factory=dict)
@@ -77,6 +90,12 @@ def pytest_addoption(parser):
                      "[thesis, thesis-disc, benchmark, general, general-disc]")
     g.addoption("--xfails-file", dest="bx_xfails", default=None, metavar="FILE",
                 help="expected failures: one check id per line, '# reason' after it")
+    g.addoption("--conformance-depth", dest="bx_depth", default="full",
+                choices=tuple(DEPTHS), help="full: every check at its full count (an engine "
+                "author's run) [full]; quick: each term at %d hypothesis states instead of %d and "
+                "the forward runs on thesis-disc only (the project's own make test runs every "
+                "engine so, make test-slow at full depth)" % (DEPTHS["quick"].examples,
+                                                              DEPTHS["full"].examples))
     g.addoption("--tolerances", dest="bx_tolerances", default=None, metavar="FILE",
                 help="a tolerance file replacing comparisons/judgments/tolerances.toml (same "
                      "tables)")
@@ -136,7 +155,8 @@ def pytest_configure(config):
         tolerances = load_tolerances() if path is None else load_complete(path)
     except ToleranceError as exc:
         raise pytest.UsageError(f"--tolerances: {exc}") from None
-    config._bx_conformance = Conformance(specs, models, options, tolerances, xfails=xfails)
+    config._bx_conformance = Conformance(specs, models, options, tolerances,
+                                         DEPTHS[config.getoption("bx_depth")], xfails=xfails)
     config.addinivalue_line("markers", "conformance: a check of the engine conformance suite")
 
 
@@ -179,7 +199,8 @@ def pytest_generate_tests(metafunc):
              and (want is None or callable(getattr(c.engine, want, None)))]
     if "simulate" in needs and not metafunc.config.getoption("bx_models"):
         from .models import DEFAULT_TRAJECTORY_MODELS   # forward runs are the costly checks
-        cands = [c for c in cands if c.model_name in DEFAULT_TRAJECTORY_MODELS]
+        keep = conf.depth.trajectory_models or DEFAULT_TRAJECTORY_MODELS
+        cands = [c for c in cands if c.model_name in keep]
     if "quantity" in metafunc.fixturenames:
         from ..judgments.terms import QUANTITIES
         pairs = [(c, q) for c in cands for q in QUANTITIES if c.engine.supports(q)]

@@ -12,7 +12,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from comparisons.judgments.terms import States, compare_term, random_states
@@ -40,12 +40,15 @@ def _states(s) -> States:
     return States(q, np.array([dq]), np.array([ddq]), np.array([T]))
 
 
-@settings(max_examples=25, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(s=state)
-def test_term_at_hypothesis_states(candidate, reference, quantity, tolerances, s):
-    """Each term at hypothesis-generated states: large angles, fast spins, steer near +-pi/2."""
-    res = compare_term(quantity, reference, candidate.engine, _states(s), tolerances[quantity])
-    assert res.passed, res.describe()
+def test_term_at_hypothesis_states(candidate, reference, quantity, tolerances, conformance):
+    """Each term at hypothesis-generated states: large angles, fast spins, steer near +-pi/2
+    (25 of them; 5 at ``--conformance-depth quick``)."""
+    @settings(max_examples=conformance.depth.examples)
+    @given(s=state)
+    def at(s):
+        res = compare_term(quantity, reference, candidate.engine, _states(s), tolerances[quantity])
+        assert res.passed, res.describe()
+    at()
 
 
 def test_term_sweep(candidate, reference, quantity, tolerances):
