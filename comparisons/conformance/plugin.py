@@ -201,13 +201,21 @@ def pytest_generate_tests(metafunc):
         from .models import DEFAULT_TRAJECTORY_MODELS   # forward runs are the costly checks
         keep = conf.depth.trajectory_models or DEFAULT_TRAJECTORY_MODELS
         cands = [c for c in cands if c.model_name in keep]
+    # a check no engine of the session can take says why, instead of pytest's "got empty
+    # parameter set"
+    why = pytest.mark.skip(reason="not applicable: it needs "
+                                  + ", ".join(sorted(set(needs) | ({want} if want else set())))
+                                  + "; no engine of this session has them all"
+                                  if needs or want else "no engine to check")
     if "quantity" in metafunc.fixturenames:
         from ..judgments.terms import QUANTITIES
         pairs = [(c, q) for c in cands for q in QUANTITIES if c.engine.supports(q)]
-        metafunc.parametrize(("candidate", "quantity"), pairs, scope="session",
-                             ids=[f"{c.id}-{q}" for c, q in pairs])
+        metafunc.parametrize(("candidate", "quantity"),
+                             pairs or [pytest.param(None, None, marks=why)], scope="session",
+                             ids=[f"{c.id}-{q}" for c, q in pairs] or ["none"])
     else:
-        metafunc.parametrize("candidate", cands, scope="session", ids=[c.id for c in cands])
+        metafunc.parametrize("candidate", cands or [pytest.param(None, marks=why)],
+                             scope="session", ids=[c.id for c in cands] or ["none"])
 
 
 @pytest.fixture(scope="session")
