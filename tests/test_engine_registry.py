@@ -88,7 +88,8 @@ def test_builtins_come_from_the_pyproject_declaration():
                     "pinocchio": "engines.pinocchio:PinocchioEngine",
                     "exudyn": "engines.exudyn:ExudynEngine",
                     "kane": "engines.kane:KaneEngine",
-                    "mujoco": "engines.mujoco:MujocoEngine"}
+                    "mujoco": "engines.mujoco:MujocoEngine",
+                    "drake": "engines.drake:DrakeEngine"}
 
 
 def test_builtin_info_lists_capabilities_contacts_and_options():
