@@ -65,7 +65,7 @@ class DrakeEngine(Engine):
         f"half-space, {DEFAULTS.contact_model} contact, {DEFAULTS.approximation} solver, time "
         f"step {DEFAULTS.time_step:g} s, stiction tolerance {DEFAULTS.stiction_tolerance:g} m/s: "
         "the contact study's closest to ideal rolling; no inverse dynamics")),)
-    costs = Costs(run_per_second=3.0, short_run=0.8, terms=1.5, faults=2.0)
+    costs = Costs(run_per_second=0.6, short_run=0.8, terms=2.0, faults=2.0)
     #: its soft contact's study (slip, penetration, lift-off, refinement): `contact_study`
     soft_contact = SOFT_CONTACT
     #: the conformance checks Drake is expected to fail, with the reason (read by the plugin)
