@@ -36,6 +36,7 @@ from reference_model.model import ForwardResult, raise_on_status, torque_array
 from pydrake.multibody.tree import MultibodyForces
 
 from ..base import CAPABILITIES, CapabilityError, Engine
+from ..batching import batched
 from ..facts import Costs, RunSetup
 from .contact_study import SOFT_CONTACT
 from .kinematics import Kinematics
@@ -104,14 +105,7 @@ class DrakeEngine(Engine):
                 f"approximation={self.settings.approximation!r})")
 
     # -- batching ----------------------------------------------------------------------
-    @staticmethod
-    def _batched(fn, *arrays):
-        first = np.asarray(arrays[0], dtype=float)
-        if first.ndim == 1:
-            return fn(*(np.asarray(a, dtype=float) for a in arrays))
-        arrs = [np.broadcast_to(np.asarray(a, dtype=float), (first.shape[0], np.shape(a)[-1]))
-                for a in arrays]
-        return np.array([fn(*row) for row in zip(*arrs)])
+    _batched = staticmethod(batched)
 
     def _set(self, q, dq=None) -> None:
         self.kin.set_state(self.mapping.q_to_drake(q),

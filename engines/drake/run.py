@@ -42,6 +42,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
+from ..stepping import forward_grid
 from .contact_plant import RunPlant, build_run_plant
 from .plant import BODY_LINKS
 
@@ -159,17 +160,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     for k in ignored:
         options.pop(k)
     settings = engine.settings.replace(**options) if options else engine.settings
-    if not (isinstance(fall_limit, (int, float)) and math.isfinite(fall_limit) and fall_limit > 0):
-        raise EngineUsageError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
-    if scenario.kind != "forward":
-        raise EngineUsageError(f"scenario {scenario.name!r} is an inverse scenario; Drake runs "
-                               "only forward scenarios")
+    grid, fall_limit = forward_grid(scenario, t_end, fall_limit, "Drake")
     model = engine.model
-    grid = scenario.t
-    if t_end is not None:
-        grid = grid[grid <= float(t_end) + 1e-12]
-        if grid.size < 2:
-            raise EngineUsageError(f"t_end = {t_end!r} leaves fewer than 2 grid samples")
     h = settings.time_step
     per = steps_per_sample(h, float(grid[1] - grid[0]), float(grid[-1] - grid[0]))
 
@@ -262,7 +254,7 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
             "rear_height_joint": ("zc, a prismatic z joint after yc (free: the rear wheel rests "
                                   "on its contact)"),
             "loads": "rider torques and drag as applied spatial forces, set before each step",
-            "fall_limit": float(fall_limit), "grid": f"scenario grid (every {per} steps)",
+            "fall_limit": fall_limit, "grid": f"scenario grid (every {per} steps)",
             "ddq": "Drake's generalized acceleration (v_next - v) / h of the step after each sample",
             "C": "reference model's constraint_residual on the Drake states",
             "diagnostics": ("slip speed and penetration of each wheel's knife-edge disc at its "

@@ -47,6 +47,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
+from ..stepping import forward_grid
 from .options import tuple_option
 
 import mujoco
@@ -192,18 +193,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     else:
         settings = engine.settings
         _, m = engine.run_model()
-    if not (isinstance(fall_limit, (int, float)) and math.isfinite(fall_limit) and fall_limit > 0):
-        raise EngineUsageError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
-    fall_limit = float(fall_limit)
-    if scenario.kind != "forward":
-        raise EngineUsageError(f"scenario {scenario.name!r} is an inverse scenario; MuJoCo runs only "
-                               "forward scenarios")
+    grid, fall_limit = forward_grid(scenario, t_end, fall_limit, "MuJoCo")
     model = engine.model
-    grid = scenario.t
-    if t_end is not None:
-        grid = grid[grid <= float(t_end) + 1e-12]
-        if grid.size < 2:
-            raise EngineUsageError(f"t_end = {t_end!r} leaves fewer than 2 grid samples")
     h = settings.timestep
     per = check_step(h, float(grid[1] - grid[0]), float(grid[-1] - grid[0]))
 
