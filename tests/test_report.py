@@ -24,7 +24,7 @@ def report(quick_report):
 
 def test_summary_carries_the_contract_keys(report):
     _, summary = report
-    assert summary["engines"] == ["reference", "pinocchio", "exudyn", "kane", "mujoco"]
+    assert summary["engines"] == ["reference", "pinocchio", "exudyn", "kane", "mujoco", "drake"]
     assert {"comparisons", "claims", "faults", "environment"} <= set(summary)
     assert summary["comparisons"], "no engine comparison in the summary"
     for c in summary["comparisons"]:
@@ -38,19 +38,21 @@ def test_summary_carries_the_contract_keys(report):
     claims = {(c["claim_id"], c["engine"]): c for c in summary["claims"]}
     assert len(claims) == len(summary["claims"])
     ids = ("check-pedal-torque", "replay-identical", "stability-psid10")
-    assert set(claims) == {(cid, e) for e in setups + ("kane", "mujoco") for cid in ids}
+    assert set(claims) == {(cid, e) for e in setups + ("kane", "mujoco", "drake") for cid in ids}
     # Kane's equations model the disc contact only: on the thesis bicycle's runs nothing of
     # its own to judge
     assert all(claims[(cid, "kane")]["verdict"] == "not assessed" for cid in ids)
     runs = {(r["engine"], r["scenario"]): r for r in summary["engine_runs"]}
-    # MuJoCo has no thesis (fork-axis) front contact: its runs of the thesis's scenarios are
-    # 'not run', a declared model difference, and (without the contact section, which judges
-    # the stability claims on its thesis-disc runs) its claims not assessed, not failed
-    for sc in ("check-forward", "stability-psid10"):
-        assert runs[("mujoco", sc)]["status"] == "not run"
-        assert "declared model difference" in runs[("mujoco", sc)]["message"]
-    assert {claims[(cid, "mujoco")]["verdict"] for cid in
-            ("check-pedal-torque", "replay-identical", "stability-psid10")} == {"not assessed"}
+    # MuJoCo and Drake have no thesis (fork-axis) front contact: their runs of the thesis's
+    # scenarios are 'not run', a declared model difference, and (without the contact section,
+    # which judges the stability claims on their thesis-disc runs) their claims not assessed,
+    # not failed
+    for soft in ("mujoco", "drake"):
+        for sc in ("check-forward", "stability-psid10"):
+            assert runs[(soft, sc)]["status"] == "not run"
+            assert "declared model difference" in runs[(soft, sc)]["message"]
+        assert {claims[(cid, soft)]["verdict"] for cid in
+                ("check-pedal-torque", "replay-identical", "stability-psid10")} == {"not assessed"}
     for e in setups:
         # the replay is not in the quick subset: its claim is listed, and not assessed
         c = claims[("replay-identical", e)]
