@@ -6,9 +6,10 @@ Measured (Drake 1.51.1, thesis-disc, stability-psid10, error at 0.3 s, wheel hal
 * With TAMSI and a point stiffness of 1e8 N/m the error is first order in the time step
   (4.3e-4, 2.1e-4, 1.1e-4 at 5e-4, 2.5e-4, 1.25e-4 s) and so is the slip: its RMS is about
   2.0 x the step (m/s per s). The stiction tolerance (1e-5 to 1e-2 m/s) moves the error by
-  under 10 % (7.8e-4 to 8.5e-4 at 1e-3 s): the friction impulse of a step already holds the contact point within the
-  regularized band, and what remains is the step's own slip (the rolling point's acceleration
-  over one step, which a solve at the end of the step does not see).
+  under 10 % (7.8e-4 to 8.5e-4 at 1e-3 s): the friction impulse of a step already holds the
+  contact point within the regularized band, and what remains is the step's own slip (the
+  rolling point's acceleration over one step, which a solve at the end of the step does not
+  see).
 * SAP behaves the same way (order 1.01: 2.0e-3, 1.0e-3, 5.0e-4, 2.5e-4 from 2e-3 to 2.5e-4 s)
   at about 1.3 x TAMSI's error and 2-3 x its cost per step; SAP ignores both the stiction
   tolerance and a point stiffness above its near-rigid limit (1e7 and 1e8 N/m give the same

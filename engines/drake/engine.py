@@ -50,8 +50,10 @@ TERMS = frozenset(CAPABILITIES) - {"simulate"}
 
 
 class DrakeEngine(Engine):
-    """Drake's mass matrix, inverse dynamics, gravity, bias term and frame kinematics; runs on
-    its point or hydroelastic contact (disc-contact models only)."""
+    """Drake's MultibodyPlant terms, all exact; forward runs on its own contact (disc only).
+
+    The terms: mass matrix, inverse dynamics, gravity, bias term and frame kinematics; the runs:
+    its point or hydroelastic contact on disc-contact models."""
 
     name = "drake"
     capabilities = frozenset(CAPABILITIES)
