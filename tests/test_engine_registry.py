@@ -89,7 +89,8 @@ def test_builtins_come_from_the_pyproject_declaration():
                     "exudyn": "engines.exudyn:ExudynEngine",
                     "kane": "engines.kane:KaneEngine",
                     "mujoco": "engines.mujoco:MujocoEngine",
-                    "dart": "engines.dart:DartEngine"}
+                    "dart": "engines.dart:DartEngine",
+                    "drake": "engines.drake:DrakeEngine"}
 
 
 def test_builtin_info_lists_capabilities_contacts_and_options():

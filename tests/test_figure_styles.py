@@ -69,11 +69,12 @@ def test_drawings_take_labels_and_axis_texts_from_their_data(curve):
     plt.close(fig)
 
 
-#: three plugins that declare neither colour nor marker, beside the installed engines: with the
-#: five built-ins, eight engines (what the report must stay readable with)
+#: three plugins that declare neither colour nor marker, beside the installed engines: eight
+#: engines or more (what the report must stay readable with)
 PLUGINS = tuple(EngineStyle(n, None, ("",)) for n in ("plugin_a", "plugin_b", "plugin_c"))
-#: colours kept for the engines being written: no fallback may take them
-KEPT = {"tab:green", "tab:brown"}
+#: colours kept for engines being written (none now: Drake and DART declare theirs), which no
+#: fallback may take
+KEPT: set[str] = set()
 
 
 def _pairs(styles):
@@ -101,10 +102,11 @@ def test_undeclared_engines_get_fallbacks_distinct_from_every_declared_one():
     cycle (C0 is tab:blue, Exudyn's), fails; so does a fallback that ignores the declared."""
     from matplotlib.colors import to_hex
     eight = resolve_styles(engine_styles() + PLUGINS)
-    assert len(eight) == 8
+    n = len(engine_styles()) + len(PLUGINS)
+    assert len(eight) == n >= 8
     colours, markers = zip(*_pairs(eight))
     # compared as drawn (hex), so 'C5' and 'tab:brown' are one colour
-    assert len({to_hex(c) for c in colours}) == 8 and len(set(markers)) == 8, _pairs(eight)
+    assert len({to_hex(c) for c in colours}) == n and len(set(markers)) == n, _pairs(eight)
     declared = {to_hex(engine_facts(st.name).colour) for st in engine_styles()}
     fallbacks = {to_hex(st.colour) for st in eight[-3:]}
     assert not fallbacks & (declared | {to_hex(c) for c in KEPT})
@@ -140,9 +142,9 @@ def test_eight_engines_in_one_figure_are_eight_colours_and_eight_markers(monkeyp
     # the figure matches its labels against these eight engines instead of the installed
     monkeypatch.setattr("comparisons.report.styles.engine_styles", lambda: eight)
     fig = figures.trajectory_overlay("s", runs, {}, 1.0, 1e-6)
-    lines = [ln for ln in fig.axes[0].get_lines() if ln.get_label() != "_nolegend_"][:8]
+    lines = [ln for ln in fig.axes[0].get_lines() if ln.get_label() != "_nolegend_"][:len(eight)]
     from matplotlib.colors import to_hex
     drawn = {(to_hex(ln.get_color()), ln.get_marker()) for ln in lines}
     plt.close(fig)
-    assert len({c for c, _ in drawn}) == 8 and len({m for _, m in drawn}) == 8, drawn
+    assert len({c for c, _ in drawn}) == len(eight) and len({m for _, m in drawn}) == len(eight), drawn
     assert not {m for _, m in drawn} & {None, "None", "", " "}, "every line carries a marker"

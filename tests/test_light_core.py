@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "numpy_engine"
 FILE_SPEC = f"{EXAMPLE / 'numpy_bicycle' / 'engine.py'}:NumpyEngine"
 #: the top-level modules a core-only install lacks: the engines' libraries and the sweep's
-HIDDEN = ("exudyn", "pinocchio", "mujoco", "dartpy", "dask", "distributed", "pyarrow")
+HIDDEN = ("exudyn", "pinocchio", "mujoco", "dartpy", "pydrake", "dask", "distributed", "pyarrow")
 
 SITECUSTOMIZE = f'''
 import sys

@@ -28,8 +28,9 @@ MAPPED = {"docs": "comparisons/docs"}
 #: the imports whose distribution is named otherwise (elsewhere the two names agree, as
 #: numpy's; importlib.metadata.packages_distributions() would say so too, but takes 3.5 s
 #: here and cannot name pin's, which installs pinocchio outside the usual layout);
-#: distributed comes with dask[distributed]
+#: distributed comes with dask[distributed]; pydrake is the module of the distribution drake
 DISTRIBUTION_OF = {"PIL": "pillow", "markdown_it": "markdown-it-py", "pinocchio": "pin",
+                   "pydrake": "drake",
                    "distributed": "dask"}
 
 

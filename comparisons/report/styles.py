@@ -19,8 +19,7 @@ name) by a checksum of its name among those still free (the same label, the same
 every figure and every process). Why not matplotlib's colour cycle, as before: its first
 colours are tab:blue and tab:orange, which Exudyn and Pinocchio declare, so an undeclared
 engine was drawn in another engine's colour (and before the engines declared theirs, Kane and
-MuJoCo came out blue and orange beside Exudyn and Pinocchio). The fallbacks leave out
-tab:green and tab:brown, kept for engines being written.
+MuJoCo came out blue and orange beside Exudyn and Pinocchio).
 """
 
 from __future__ import annotations

@@ -60,6 +60,7 @@ class DartEngine(Engine):
                       "lift off)")
     label = "DART"
     colour = "tab:brown"
+    marker = "h"
     run_setups = (RunSetup(kinds=("forward",), settings=(
         f"DART's own contact (disc-contact models only): cylinders of half-width "
         f"{DEFAULTS.wheel_half_width:g} m on a ground box, {DEFAULTS.collision_detector} collision "

@@ -55,6 +55,7 @@ from reference_model.model import DEP, IND, ForwardResult, raise_on_status, torq
 from reference_model.scenarios import Scenario, run_forward, run_inverse
 
 from ..base import CAPABILITIES, Engine, EngineError
+from ..batching import batched
 from ..facts import Costs, RunSetup
 
 try:
@@ -224,14 +225,7 @@ class PinocchioEngine(Engine):
                      for j in (J_PSI, J_GAMMA, J_EPS)]
 
     # -- batching ----------------------------------------------------------------------
-    @staticmethod
-    def _batched(fn, *arrays):
-        first = np.asarray(arrays[0], dtype=float)
-        if first.ndim == 1:
-            return fn(*(np.asarray(a, dtype=float) for a in arrays))
-        arrs = [np.broadcast_to(np.asarray(a, dtype=float), (first.shape[0], np.shape(a)[-1]))
-                for a in arrays]
-        return np.array([fn(*row) for row in zip(*arrs)])
+    _batched = staticmethod(batched)
 
     # -- rigid-body terms --------------------------------------------------------------
     def _M(self, q):

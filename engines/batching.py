@@ -1,0 +1,20 @@
+"""One state or a batch: the engines' per-state loop over a batch (docs/engines.md, "The
+capabilities": every method takes q (8,) or (N, 8), and dq, ddq, torques alike)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["batched"]
+
+
+def batched(fn, *arrays):
+    """``fn`` of one state's arrays, on one state or on each row of a batch: the first array
+    decides (1-D: one state, returned as ``fn`` gives it; 2-D: N states, the others broadcast to
+    N rows of their own width), and the results are stacked."""
+    first = np.asarray(arrays[0], dtype=float)
+    if first.ndim == 1:
+        return fn(*(np.asarray(a, dtype=float) for a in arrays))
+    arrs = [np.broadcast_to(np.asarray(a, dtype=float), (first.shape[0], np.shape(a)[-1]))
+            for a in arrays]
+    return np.array([fn(*row) for row in zip(*arrs)])
