@@ -51,7 +51,7 @@ class _Config:
 
     def __init__(self, **options):
         self.options = {"bx_engines": ["pinocchio"], "bx_models": ["thesis"], "bx_options": [],
-                        "bx_xfails": None, "bx_tolerances": None, **options}
+                        "bx_xfails": None, "bx_tolerances": None, "bx_depth": "full", **options}
 
     def getoption(self, name):
         return self.options[name]

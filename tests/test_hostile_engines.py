@@ -135,12 +135,18 @@ def test_a_real_ctrl_c_during_an_engine_call_is_not_swallowed(thesis):
 
     eng = load_engine(f"{FILE}:_Broken", thesis)   # built, then its class swapped: same checks
     eng.__class__ = Pressed
+    # a terminal's state: SIGINT at Python's default and not blocked (a pytest-xdist worker
+    # that ran other tests first was once seen otherwise, and the Ctrl-C never arrived)
+    handler = signal.signal(signal.SIGINT, signal.default_int_handler)
+    mask = signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     previous = install_handlers("test")
     try:
         with pytest.raises(KeyboardInterrupt) as info:
             eng.mass_matrix(Q)
     finally:
         restore_handlers(previous)
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        signal.signal(signal.SIGINT, handler)
     assert not isinstance(info.value, EngineCallError)
 
 
