@@ -21,7 +21,7 @@ $(STAMP): pyproject.toml $(VENV)/bin/python
 	touch $(STAMP)
 
 test: $(STAMP)
-	$(VENV)/bin/python -m pytest -n auto --dist loadgroup --durations=5 -m "not bicycles and not slow" \
+	$(VENV)/bin/python -m pytest -n auto --durations=5 -m "not bicycles and not slow" \
 	  --conformance-depth quick
 
 # The tests marked `slow`: the harness's own processes (signals to the process tree, workers
@@ -29,7 +29,7 @@ test: $(STAMP)
 # then the conformance suite at its full depth on every registered engine (make test runs it
 # at --conformance-depth quick). Kept out of `make test`'s 90 s; .ci/run runs them.
 test-slow: $(STAMP)
-	$(VENV)/bin/python -m pytest -n auto --dist loadgroup --durations=5 -m "slow and not bicycles"
+	$(VENV)/bin/python -m pytest -n auto --durations=5 -m "slow and not bicycles"
 	$(VENV)/bin/python -m pytest -n auto --durations=5 comparisons/conformance/test_conformance.py
 
 # The ten measured bicycles BicycleParameters ships, end to end (import, run --quick --model on

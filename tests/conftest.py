@@ -125,12 +125,3 @@ def failing_tolerances(tmp_path_factory):
     path.write_text(re.sub(r"(?m)^tolerance = .*$", "tolerance = 1e-300",
                            TOLERANCES_FILE.read_text()))
     return path
-
-
-def pytest_collection_modifyitems(config, items):
-    """Every test that reads the shared quick report goes to one xdist worker
-    (``--dist loadgroup``, the Makefile's): otherwise the second worker sits blocked on the
-    report's lock for the ~17 s the first takes to make it, instead of running other tests."""
-    for item in items:
-        if "quick_report" in getattr(item, "fixturenames", ()):
-            item.add_marker(pytest.mark.xdist_group("quick-report"))
