@@ -60,6 +60,9 @@ class Costs:
     short_run: float = 0.8          # an inverse scenario (check, zigzag)
     terms: float = 1.5              # the term-by-term stage
     faults: float = 2.0             # the fault-injection stage
+    #: (scenario, s): measured times of runs the rate above misjudges (e.g. a manoeuvre that
+    #: needs several times the Newton iterations of the others); they replace it
+    scenario_runs: tuple[tuple[str, float], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,7 @@ import re
 import sys
 import tomllib
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 from .base import Engine, EngineLoadError, EngineSpecError
@@ -93,7 +94,18 @@ def _pyproject_registrations(path: Path = _PYPROJECT) -> list[Registration]:
 def registrations() -> list[Registration]:
     """Every engine registered in the group, in a stable order (built-ins from the source tree
     if bicycle-xval's own entry points are not installed). A name registered twice appears
-    twice; `load_engine` refuses it as ambiguous."""
+    twice; `load_engine` refuses it as ambiguous.
+
+    Read once per import path (``sys.path`` as it is now): scanning the installed
+    distributions' entry points and parsing their metadata costs ~40 ms, and every
+    `load_engine` asks (a run builds engines a few hundred times). A distribution put on a
+    new path entry is found; one installed into a path entry already read is found by the
+    next process."""
+    return list(_registrations(tuple(sys.path)))
+
+
+@lru_cache(maxsize=8)
+def _registrations(path: tuple[str, ...]) -> tuple[Registration, ...]:
     found: list[Registration] = []
     for ep in metadata.entry_points(group=GROUP):
         dist = getattr(ep, "dist", None)
@@ -112,7 +124,7 @@ def registrations() -> list[Registration]:
     # third parties' by name
     declared = [r.name for r in _pyproject_registrations()]
     mine.sort(key=lambda r: (declared.index(r.name) if r.name in declared else len(declared), r.name))
-    return mine + sorted((r for r in regs if r not in mine), key=lambda r: (r.name, r.target))
+    return tuple(mine + sorted((r for r in regs if r not in mine), key=lambda r: (r.name, r.target)))
 
 
 def _canonical(dist: str | None) -> str:

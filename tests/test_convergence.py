@@ -300,3 +300,51 @@ def test_quick_convergence_steps_can_reach_a_verdict():
     from comparisons.stages.fixed_step import QUICK_CONVERGENCE_STEPS
     h = sorted(QUICK_CONVERGENCE_STEPS)
     assert len(h) >= 3 and h[-1] / h[0] >= MIN_SPAN
+
+
+def test_runs_given_to_the_study_are_judged_as_the_factorys():
+    """A study of runs already made (the same runs judged against a second reference) is the
+    study the factory's runs give, and never calls the factory. Planted: ``runs`` ignored
+    (the factory called anyway) fails the raising factory."""
+    t = 0.01 * np.arange(51)
+    ref = dataclasses.replace(_traj(t, np.zeros((t.size, 8))), settings={"integrator": "exact"})
+    steps, sc = (4e-3, 2e-3, 1e-3, 5e-4), SCENARIOS["stability-psid10"]
+    made = convergence_study(load_model("thesis-disc"), lambda h: _FakeEngine(ref, 40 * h**2),
+                             sc, steps=steps, horizon=0.5, reference=ref)
+    runs = [_FakeEngine(ref, 40 * h**2).simulate(sc, t_end=0.5) for h in steps]
+
+    def refuse(h):
+        raise AssertionError("the factory was called although the runs were given")
+    given = convergence_study(load_model("thesis-disc"), refuse, sc, steps=steps, horizon=0.5,
+                              reference=ref, runs=runs)
+    assert given == made and given.verdict == "converges"
+    with pytest.raises(ValueError, match="3 runs given for 4 steps"):
+        convergence_study(load_model("thesis-disc"), refuse, sc, steps=steps, horizon=0.5,
+                          reference=ref, runs=runs[:3])
+
+
+def test_the_fixed_step_convergence_runs_each_variant_once_per_model(monkeypatch):
+    """The fixed-step convergence section judges the disc-contact tree against two references
+    (thesis-disc: it converges; thesis: the declared model difference): the same runs, made
+    once. Counted on a synthetic engine in place of the declared one's (each build of a
+    variant and model at a step is one run): 3 (variant, model) pairs x 4 steps = 12, not the
+    16 when each reference had its own. Planted: the runs made per case (16) fails."""
+    from comparisons.judgments import convergence
+    from comparisons.stages import fixed_step
+    t = 0.01 * np.arange(51)
+    ref = dataclasses.replace(_traj(t, np.zeros((t.size, 8))), settings={"integrator": "exact"})
+    built = []
+
+    def fake_build(spec, model, fixed, variant, **more):
+        built.append((variant, model.name, more[fixed.option]))
+        return _FakeEngine(ref, 40 * more[fixed.option] ** 2)
+    monkeypatch.setattr(fixed_step, "_build", fake_build)
+    # the references too (the real ones cost ~0.5 s here; what is counted is the engine's runs)
+    monkeypatch.setattr(convergence, "reference_run", lambda *a, **k: ref)
+    from engines.facts import engine_facts
+    fixed = engine_facts("exudyn").fixed_step
+    sec = fixed_step.convergence_section("exudyn", False)
+    pairs = {(v, m) for v, m, _ in built}
+    assert len(built) == len(set(built)) == 4 * len(pairs)
+    assert len(pairs) == len(fixed.variants) + (fixed.thesis_variant is not None)
+    assert len(sec.comparisons) == len(pairs) + 1   # the disc tree judged twice

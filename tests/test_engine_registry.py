@@ -333,3 +333,21 @@ def test_conformance_and_warm_imports_cover_a_third_party(third_party, tmp_path,
         monkeypatch.delitem(sys.modules, name, raising=False)
     warm_imports(("warm_probe_engine", "no_such_module_xyz"))
     assert "warm_probe_library" in sys.modules and "warm_probe_absent" not in sys.modules
+
+
+def test_registrations_are_read_once_per_import_path(tmp_path, monkeypatch):
+    """Scanning the installed distributions costs ~40 ms and every load_engine asks: it is
+    read once per sys.path. A distribution on a new path entry is found (one scan), asked
+    again it is not scanned again, and once the entry is gone so is the engine. Planted: the
+    cache dropped fails the count; a cache not keyed on sys.path fails to find 'cached'."""
+    import engines.registry as registry
+    _dist_info(tmp_path, "cache-probe", "0.1", {"cached": "engines.reference:ReferenceEngine"})
+    scans = []
+    real = registry.metadata.entry_points
+    monkeypatch.setattr(registry.metadata, "entry_points",
+                        lambda **kw: scans.append(kw) or real(**kw))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "cached" in available_engines() and "cached" in available_engines()
+    assert len(scans) == 1
+    monkeypatch.undo()
+    assert "cached" not in available_engines()

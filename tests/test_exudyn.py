@@ -90,7 +90,7 @@ def test_thesis_contact_rows_equal_reference(thesis):
     uc = ThesisFrontContact(thesis.params)
     q, _, _ = _random_states(20, seed=13)
     for qk in q:
-        h, J_height, J_vel = uc._rows(qk)
+        h, J_height, J_vel, _ = uc._rows(qk)
         D = thesis.constraint_jacobian(qk)
         assert abs(h - thesis.constraint_residual(qk, np.zeros(8))[0]) < 1e-12
         assert np.abs(J_height - D[0]).max() < 1e-12

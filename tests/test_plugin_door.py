@@ -196,3 +196,18 @@ def test_the_quick_depth_checks_fewer_states_and_one_trajectory_model(tmp_path):
                       "--conformance-depth", d, cwd=tmp_path).stdout for d in ("quick", "full")}
     assert "thesis-disc-replay" in ids["quick"] and "general-replay" not in ids["quick"]
     assert "general-replay" in ids["full"], ids["full"][-2000:]
+def test_an_engines_declared_scenario_run_times_order_its_runs(tmp_path):
+    """`Costs.scenario_runs` replaces the per-second rate for the scenarios it names (on any
+    model: `replay-on-<model>` is the replay), so a run several times the rate's estimate is
+    queued first instead of last. Expected values: the declared numbers and the rate times the
+    scenario's length (1.2 s of a stability run). Planted: the override read for the
+    scenario's full name only fails the model's replay."""
+    (tmp_path / "slow_replay.py").write_text(
+        "from engines.base import Engine\nfrom engines.facts import Costs\n"
+        "class SlowReplay(Engine):\n    name = 'slow-replay'\n"
+        "    capabilities = frozenset({'simulate'})\n"
+        "    costs = Costs(run_per_second=0.5, scenario_runs=(('replay', 9.0),))\n")
+    from comparisons.stages.runs import cost, setup_of
+    setup = setup_of(f"{tmp_path / 'slow_replay.py'}:SlowReplay")
+    assert cost(setup, "replay") == cost(setup, "replay-on-my-bike") == 9.0
+    assert cost(setup, "stability-psid5") == pytest.approx(0.5 * 1.2)

@@ -298,7 +298,8 @@ def convergence_study(model_for_reference: Model, engine_factory: Callable[[floa
                       scenario: Scenario, steps: Sequence[float] = DEFAULT_STEPS,
                       horizon: float | None = None, reference_rtol: float = REFERENCE_RTOL, *,
                       reference: Trajectory | None = None,
-                      coords: Sequence[str] = COMPARED) -> ConvergenceStudy:
+                      coords: Sequence[str] = COMPARED,
+                      runs: Sequence[Trajectory] | None = None) -> ConvergenceStudy:
     """Run ``engine_factory(h).simulate(scenario, t_end=horizon)`` for each step h and compare
     q with the reference (``model_for_reference``, projection, DOP853 at ``reference_rtol``),
     run once, on the common output grid up to ``horizon``.
@@ -306,7 +307,9 @@ def convergence_study(model_for_reference: Model, engine_factory: Callable[[floa
     ``horizon=None`` uses `reference_horizon` (one more reference run, perturbed). Runs that
     end earlier (a fall) are compared up to the earliest end of all, so every step is judged
     over the same times. ``reference``: a reference trajectory already computed (its settings
-    are then what they are; ``reference_rtol`` is ignored)."""
+    are then what they are; ``reference_rtol`` is ignored). ``runs``: the engine's runs at
+    ``steps`` already made (each up to ``horizon``, e.g. for a study of the same runs against
+    another reference); ``engine_factory`` is then not called."""
     steps = tuple(float(h) for h in steps)
     if len(steps) < 2 or any(not h > 0 for h in steps):
         raise ValueError(f"steps must be >= 2 positive time steps; got {steps!r}")
@@ -321,7 +324,10 @@ def convergence_study(model_for_reference: Model, engine_factory: Callable[[floa
         reason = "given"
         if reference is None:
             reference = reference_run(model_for_reference, scenario, reference_rtol, t_end=horizon)
-    runs = [engine_factory(h).simulate(scenario, t_end=horizon) for h in steps]
+    if runs is None:
+        runs = [engine_factory(h).simulate(scenario, t_end=horizon) for h in steps]
+    elif len(runs) != len(steps):
+        raise ValueError(f"{len(runs)} runs given for {len(steps)} steps")
     # judge every step over the same times: up to the earliest grid time all runs reached
     last = min(float(_common(reference, tr, horizon)[0][-1]) for tr in runs)
     if last < horizon - 1e-9:

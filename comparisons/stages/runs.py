@@ -125,6 +125,8 @@ def cost(setup: EngineSetup, scenario: str) -> float:
     from engines.facts import engine_facts
     c = engine_facts(setup.engine).costs
     scenario = scenario.split("-on-")[0]
+    if scenario in dict(c.scenario_runs):
+        return dict(c.scenario_runs)[scenario]
     if scenario in ("check", "zigzag"):
         return c.short_run
     length = 6.3 if scenario in ("replay", "check-forward") else 1.2

@@ -113,7 +113,10 @@ class ThesisFrontContact:
 
     def _rows(self, q):
         self.calls += 1
-        key = tuple(np.asarray(q, dtype=float)[:N_Q].tolist())   # plain floats: cheap to compare
+        # plain floats, cheap to compare: Exudyn passes a list of them (no numpy round trip,
+        # ~36 calls a step)
+        key = (tuple(q[:N_Q]) if isinstance(q, list)
+               else tuple(np.asarray(q, dtype=float)[:N_Q].tolist()))
         if key == self._last_q:
             return self._last
         xc, yc, phi, theta, _, beta, gamma, _ = key
@@ -147,14 +150,15 @@ class ThesisFrontContact:
             [1.0, 0.0, c_phi[0], c_theta[0], 0.0, c_beta[0], c_gamma[0], -R * x4[0]],
             [0.0, 1.0, c_phi[1], c_theta[1], 0.0, c_beta[1], c_gamma[1], -R * x4[1]]])
         self._last_q = key
-        self._last = (rD[2], J_height, J_velocity)   # the height row: the fork's point, no eps
+        # the height row: the fork's point, no eps; also as the 1 x 8 Jacobian Exudyn asks for
+        self._last = (rD[2], J_height, J_velocity, J_height.reshape(1, N_Q))
         return self._last
 
     def jacobian_check(self, q) -> float:
         """max |difference| between these rows and the ones from ``mapping.body_states``."""
         from .mapping import body_states
         q = np.asarray(q, dtype=float)
-        h, Jh, Jv = self._rows(q)
+        h, Jh, Jv, _ = self._rows(q)
         st = body_states(self.params, np.broadcast_to(q, (N_Q, N_Q)), np.eye(N_Q))
         z4 = st["A"][4][0][:, 2]
         rD = st["r"][5][0] - self._R * z4
@@ -164,13 +168,13 @@ class ThesisFrontContact:
 
     # Exudyn user functions: (mbs, t, itemNumber, q, q_t, velocityLevel)
     def height(self, mbs, t, itemNumber, q, q_t, velocityLevel):
-        h, J, _ = self._rows(q)
+        h, J, _, _ = self._rows(q)
         if velocityLevel:       # index-2 solvers ask for the time derivative
             return [float(J @ np.asarray(q_t, dtype=float))]
         return [float(h)]
 
     def height_jacobian(self, mbs, t, itemNumber, q, q_t, velocityLevel):
-        return self._rows(q)[1].reshape(1, N_Q)
+        return self._rows(q)[3]
 
     def velocity(self, mbs, t, itemNumber, q, q_t, velocityLevel):
         return list(self._rows(q)[2] @ np.asarray(q_t, dtype=float))

