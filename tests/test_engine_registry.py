@@ -88,6 +88,7 @@ def test_builtins_come_from_the_pyproject_declaration():
                     "pinocchio": "engines.pinocchio:PinocchioEngine",
                     "exudyn": "engines.exudyn:ExudynEngine",
                     "kane": "engines.kane:KaneEngine",
+                    "fmu": "engines.fmu:FmuEngine",
                     "mujoco": "engines.mujoco:MujocoEngine"}
 
 
