@@ -62,8 +62,7 @@ def engine(thesis, thesis_fmu):
 def test_the_exported_fmu_passes_fmpys_validation_and_states_its_contract(thesis_fmu):
     """fmpy's own checks (schema, ModelStructure, start values, causality/variability, units)
     find nothing; the description states the Baumgarte constants; the thirty parameters are
-    there by name and SI unit (planted: der(d_*) listed without derivative= fails fmpy's
-    ModelStructure check)."""
+    there by name and SI unit."""
     from fmpy import read_model_description
     from fmpy.validation import validate_fmu
     assert validate_fmu(str(thesis_fmu)) == []
@@ -85,9 +84,8 @@ def test_the_fmu_engine_agrees_with_the_reference_to_round_off(engine, thesis):
     """Forward accelerations and the thesis's terms at random consistent states, through the
     FMI calls, against the reference's ctypes calls. The same generated C, compiled twice
     (with the wrapper inlining differently): round-off only, 1e-12 relative to the largest
-    entry (the terms' own tolerance in tolerances.toml). Planted: the wrapper returning ddq
-    with a1 = a2 = 10 where the mapping asks 0 (the instance key ignored) fails at
-    inconsistent states below."""
+    entry (the terms' own tolerance in tolerances.toml). Planted and failing: the instance
+    key ignored (every run at a1 = a2 = 0), caught by the Baumgarte comparison below."""
     rng = np.random.default_rng(26)
     for _ in range(6):
         s = consistent_state(thesis, rng.normal(size=8) * 0.3, rng.normal(size=8))
@@ -134,7 +132,7 @@ def test_bad_fmu_options_are_one_line_errors(thesis, options, field):
 
 def test_a_mapping_naming_a_missing_variable_is_named(thesis, thesis_fmu, tmp_path):
     """The template with one coordinate renamed: the error names the field and the variable
-    (planted: the check dropped, and the engine fails later inside fmpy with a KeyError)."""
+    (planted and failing: the name check dropped)."""
     from engines import load_engine
     text = fmu_export.mapping_text(thesis).replace('theta = "theta"', 'theta = "roll"')
     path = tmp_path / "m.toml"
@@ -163,8 +161,7 @@ def test_the_exported_fmu_passes_the_conformance_suite(thesis_fmu, tmp_path):
 @pytest.mark.slow
 def test_diagnose_localizes_a_parameter_changed_in_a_rebuilt_fmu(thesis, tmp_path, capsys):
     """An FMU rebuilt with the frame's mass 2 kg heavier, checked against the thesis: diagnose
-    names m3 and body 3 and fits the 2 kg (planted: the FMU built from the thesis itself, and
-    diagnose says everything agrees, so this fails)."""
+    names m3 and body 3 and fits the 2 kg."""
     from comparisons.cli import main
     bad = thesis.with_params(thesis.params.replace(m3=thesis.params.m3 + 2.0))
     path = fmu_export.write_fmu(bad, tmp_path / "bad.fmu")
