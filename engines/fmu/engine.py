@@ -23,6 +23,7 @@ from reference_model.scenarios import Scenario, run_forward
 
 from ..base import Engine, EngineSpecError, UnsupportedModel
 from ..facts import Costs, RunSetup
+from .cosimulation import co_simulate
 from .mapping import MappingError, parse_mapping
 
 __all__ = ["FmuEngine", "MAPPING_IN_FMU"]
@@ -96,8 +97,11 @@ class FmuEngine(Engine):
     costs = Costs(run_per_second=0.5, short_run=0.5, terms=0.5, faults=0.5)
 
     def __init__(self, model: Model, fmu: str | None = None, mapping: str | None = None,
-                 parameters: str = "model"):
+                 parameters: str = "model", interface: str = "auto"):
         super().__init__(model)
+        if interface not in ("auto", "me", "cs"):
+            raise EngineSpecError(f"engine option interface={interface}: fix: auto (Model "
+                                  "Exchange when the FMU has it), me or cs (Co-Simulation)")
         if parameters not in ("model", "fmu"):
             raise EngineSpecError(f"engine option parameters={parameters}: fix: model (set the "
                                   "FMU's mapped parameters from the model) or fmu (its own values)")
@@ -109,10 +113,14 @@ class FmuEngine(Engine):
             raise EngineSpecError(f"engine option fmu={fmu}: its modelDescription.xml does not "
                                   f"read ({str(exc).splitlines()[0][:160]}); fix: give a valid "
                                   "FMI 2.0 FMU") from None
-        if self._description.modelExchange is None:
-            raise EngineSpecError(f"engine option fmu={fmu}: a Co-Simulation-only FMU; fix: export "
-                                  "it for Model Exchange (this engine integrates the derivatives "
-                                  "itself)")
+        has = {"me": self._description.modelExchange is not None,
+               "cs": self._description.coSimulation is not None}
+        self.interface = ("me" if has["me"] else "cs") if interface == "auto" else interface
+        if not has[self.interface]:
+            raise EngineSpecError(f"engine option interface={interface}: the FMU {fmu} has no "
+                                  f"{'Model-Exchange' if self.interface == 'me' else 'Co-Simulation'}"
+                                  " interface; fix: interface=auto")
+        self._path = path
         variables = {v.name: v for v in self._description.modelVariables}
         try:
             self.mapping = parse_mapping(text, frozenset(variables), where)
@@ -123,11 +131,11 @@ class FmuEngine(Engine):
                                    f"the model {model.name!r} the {model.contact} one")
         states = [d.variable.derivative.name for d in self._description.derivatives]
         mapped = [r.name for r in self.mapping.coordinates + self.mapping.rates]
-        lost = [n for n in mapped if n not in states]
+        lost = [n for n in mapped if n not in states] if self.interface == "me" else []
         if lost:
             raise EngineSpecError(f"{where}: {', '.join(lost)} are not continuous states of the FMU; "
                                   "fix: map [coordinates] and [rates] to its states")
-        self._index = np.array([states.index(n) for n in mapped])
+        self._index = np.array([states.index(n) for n in mapped]) if self.interface == "me" else None
         self._scale = np.array([r.scale for r in self.mapping.coordinates + self.mapping.rates])
         self._vr = {n: v.valueReference for n, v in variables.items()}
         self._torque_vr = [self._vr[r.name] for r in self.mapping.torques]
@@ -141,7 +149,8 @@ class FmuEngine(Engine):
         caps |= {c for t, c in _TERM_CAPABILITY.items() if t in self.mapping.terms}
         if {"F", "S"} <= set(self.mapping.terms):
             caps.add("generalized_forces")
-        self.capabilities = frozenset(caps)
+        # a Co-Simulation FMU only steps: runs, nothing at a single state
+        self.capabilities = frozenset(caps) if self.interface == "me" else frozenset({"simulate"})
 
     def __del__(self):
         for inst in getattr(self, "_instances", {}).values():
@@ -193,6 +202,8 @@ class FmuEngine(Engine):
                              status)
 
     def forward_acceleration(self, q, dq, torques=(0.0, 0.0, 0.0)):
+        if self.interface != "me":
+            self._missing("forward_acceleration")
         res = self.forward(q, dq, torques, None)
         if np.any(res.status):
             raise ArithmeticError("the FMU's derivatives failed (fmi2GetDerivatives) at "
@@ -214,7 +225,7 @@ class FmuEngine(Engine):
         return out[0] if np.ndim(q) == 1 else out
 
     def mass_matrix(self, q):
-        if "mass_matrix" not in self.capabilities:
+        if "mass_matrix" not in self.capabilities:   # (checked: they are instance capabilities)
             self._missing("mass_matrix")
         return self._outputs(self.mapping.terms["M"], q, np.zeros_like(np.asarray(q, float)))
 
@@ -247,6 +258,8 @@ class FmuEngine(Engine):
         return self._outputs(tuple((n,) for n in self.mapping.residual), q, dq)
 
     def simulate(self, scenario: Scenario, **options):
+        if self.interface == "cs":
+            return co_simulate(self, scenario, **options)
         return run_forward(_FmuDynamics(self), scenario, torques_from=self.model, **options)
 
 

@@ -15,6 +15,8 @@
 #include "bicycle_generated.c"
 
 #define GUID "@GUID@"
+#define COSIMULATION @COSIMULATION@   /* 1: also Co-Simulation, fixed-step RK4 (fmi2DoStep) */
+#define CS_STEP @CS_STEP@
 #define VR_Q 0
 #define VR_DQ 8
 #define VR_DERQ 16
@@ -119,11 +121,12 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
                               const fmi2CallbackFunctions *cb, fmi2Boolean visible, fmi2Boolean logging)
 {
     (void)location; (void)visible; (void)logging;
-    if (type != fmi2ModelExchange || !guid || strcmp(guid, GUID) != 0) {
+    int kind_ok = type == fmi2ModelExchange || (COSIMULATION && type == fmi2CoSimulation);
+    if (!kind_ok || !guid || strcmp(guid, GUID) != 0) {
         if (cb && cb->logger)
             cb->logger(cb->componentEnvironment, name, fmi2Error, "logError",
-                       type != fmi2ModelExchange ? "this FMU is Model Exchange only"
-                                                 : "GUID does not match the modelDescription");
+                       !kind_ok ? "this FMU does not provide that interface"
+                                : "GUID does not match the modelDescription");
         return NULL;
     }
     Bicycle *b = calloc(1, sizeof *b);
@@ -257,3 +260,57 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size
     for (size_t i = 0; i < n; ++i) x[i] = 1.0;
     return fmi2OK;
 }
+
+/* -- Co-Simulation (when COSIMULATION): classical RK4 at steps of at most CS_STEP seconds, the
+ * inputs held over a communication step. */
+static int rk4(Bicycle *b, double h)
+{
+    double y[2 * NQ], k[4][2 * NQ];
+    memcpy(y, b->q, sizeof b->q);
+    memcpy(y + NQ, b->dq, sizeof b->dq);
+    static const double c[4] = {0.0, 0.5, 0.5, 1.0};
+    for (int s = 0; s < 4; ++s) {
+        for (int i = 0; i < 2 * NQ; ++i) {
+            double yi = y[i] + (s ? c[s] * h * k[s - 1][i] : 0.0);
+            if (i < NQ) b->q[i] = yi; else b->dq[i - NQ] = yi;
+        }
+        b->dirty = 1;
+        evaluate(b);
+        if (b->status) return b->status;
+        memcpy(k[s], b->dq, sizeof b->dq);
+        memcpy(k[s] + NQ, b->ddq, sizeof b->ddq);
+    }
+    for (int i = 0; i < 2 * NQ; ++i) {
+        double yi = y[i] + h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
+        if (i < NQ) b->q[i] = yi; else b->dq[i - NQ] = yi;
+    }
+    b->dirty = 1;
+    return 0;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real dt, fmi2Boolean noSetPrior)
+{
+    Bicycle *b = c;
+    (void)noSetPrior;
+    int n = (int)ceil(dt / CS_STEP - 1e-9);
+    if (n < 1) n = 1;
+    for (int i = 0; i < n; ++i)
+        if (rk4(b, dt / n)) { logf_(b, fmi2Error, "fmi2DoStep: singular system or non-finite state"); return fmi2Error; }
+    b->time = t + dt;
+    return fmi2OK;
+}
+fmi2Status fmi2CancelStep(fmi2Component c) { (void)c; return fmi2Error; }
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer o[], const fmi2Real v[])
+{ (void)vr; (void)o; (void)v; return none_(c, n); }
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer o[], fmi2Real v[])
+{ (void)vr; (void)o; (void)v; return none_(c, n); }
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind k, fmi2Status *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind k, fmi2Real *v)
+{
+    if (k != fmi2LastSuccessfulTime) return fmi2Discard;
+    *v = ((Bicycle *)c)->time;
+    return fmi2OK;
+}
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind k, fmi2Integer *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind k, fmi2Boolean *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind k, fmi2String *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
