@@ -20,9 +20,12 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import io
 import os
+import platform
 import shlex
 import subprocess
+import sys
 import tempfile
 import zipfile
 from pathlib import Path
@@ -33,6 +36,7 @@ import numpy as np
 from ..equations import codegen
 from ..model import CONSTRAINT_NAMES, Model
 from ..names import COORDINATES, TORQUE_NAMES
+from ..parameters.benchmark_files import _write_atomically
 from ..parameters.schema import PARAMETER_DESCRIPTIONS, PARAMETER_NAMES, PARAMETER_UNITS
 from ..solvers import THESIS_BAUMGARTE, consistent_state
 from .text import float_text
@@ -227,6 +231,15 @@ def mapping_text(model: Model | None = None, baumgarte=THESIS_BAUMGARTE) -> str:
     return "\n".join(head) + "\n"
 
 
+def _platform() -> str:
+    """The FMI 2.0 platform folder of the binary built here (Linux x86-64 only)."""
+    if sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64"):
+        return _PLATFORM
+    raise FmuExportError(f"export --format fmu builds a Linux x86-64 binary (FMI's {_PLATFORM}); "
+                         f"this is {sys.platform} {platform.machine()}; fix: export on Linux "
+                         "x86-64, or compile the FMU's sources/ with your tool")
+
+
 def _compiler() -> tuple[str, ...]:
     cc = codegen.compiler_command()
     problem = codegen.compiler_problem(cc)
@@ -255,6 +268,7 @@ def write_fmu(model: Model, out: str | os.PathLike[str], baumgarte=THESIS_BAUMGA
     Raises `FmuExportError` (no compiler, no headers) and `codegen.CodegenError`."""
     out = Path(out)
     headers = fmi_headers()
+    binary = f"binaries/{_platform()}/{MODEL_IDENTIFIER}.so"
     cc = _compiler()
     library = codegen.build(model.contact, backend="c")
     generated = (library.path / codegen.C_FILES[0]).read_text(encoding="utf-8")
@@ -278,21 +292,13 @@ def write_fmu(model: Model, out: str | os.PathLike[str], baumgarte=THESIS_BAUMGA
         for name, text in sources.items():
             (build / name).write_text(text, encoding="utf-8")
         so = _compile(build, headers, cc)
-        fd, part = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-        os.close(fd)
-        try:
-            with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
-                z.writestr("modelDescription.xml", model_description(model, guid, baumgarte,
-                                                                    co_simulation))
-                z.write(so, f"binaries/{_PLATFORM}/{MODEL_IDENTIFIER}.so")
-                for name, text in sources.items():
-                    z.writestr(f"sources/{name}", text)
-                z.writestr(MAPPING_FILE, mapping_text(model, baumgarte))
-            mask = os.umask(0o022)
-            os.umask(mask)
-            os.chmod(part, 0o666 & ~mask)
-            os.replace(part, out)
-        except BaseException:
-            Path(part).unlink(missing_ok=True)
-            raise
+        data = io.BytesIO()
+        with zipfile.ZipFile(data, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", model_description(model, guid, baumgarte,
+                                                                co_simulation))
+            z.write(so, binary)
+            for name, text in sources.items():
+                z.writestr(f"sources/{name}", text)
+            z.writestr(MAPPING_FILE, mapping_text(model, baumgarte))
+    _write_atomically(out, data.getvalue(), parents=False)
     return out
