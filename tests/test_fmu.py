@@ -198,3 +198,26 @@ def test_a_co_simulation_fmu_gives_runs_only(thesis):
     assert np.array_equal(got.t[early], ref.t[:early.sum()])
     assert np.max(np.abs(got.q[early] - ref.q[:early.sum()])) < 1e-9
     assert np.max(np.abs(got.dq[early] - ref.dq[:early.sum()])) < 1e-8
+
+
+@pytest.mark.slow
+def test_run_with_the_fmu_engine_compares_terms_and_localizes_every_fault(thesis_fmu, tmp_path):
+    """``run --quick`` with the FMU as an engine (its file as an engine option): its terms
+    agree, the fault suite is built with that option and localizes all six faults, and the
+    benchmark's terms (the disc contact, which a thesis-contact FMU does not model) list it
+    as not run on this model. Failing before the stages passed the engine's options to the
+    fault suite ('engine fmu needs its FMU') and before the benchmark's terms caught
+    UnsupportedModel; ~15 s."""
+    import json
+
+    from comparisons.cli import main
+    out = tmp_path / "r"
+    assert main(["run", "--quick", "--scenarios", "check", "--engines", f"reference,{SPEC}",
+                 "--engine-option", f"fmu={thesis_fmu}", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    mine = [c for c in summary["comparisons"] if c["engines"] == ["reference", "FmuEngine"]]
+    assert {c["quantity"] for c in mine} >= {"mass_matrix", "forward_acceleration"}
+    assert all(c["passed"] for c in mine)
+    faults = [f for f in summary["faults"] if f["engine"] == "FmuEngine"]
+    assert len(faults) == 6 and all(f["verdict"] == "localized" for f in faults), faults
+    assert "FmuEngine: not run on this model" in (out / "report.md").read_text()
