@@ -332,3 +332,37 @@ def test_conformance_and_warm_imports_cover_a_third_party(third_party, tmp_path,
         monkeypatch.delitem(sys.modules, name, raising=False)
     warm_imports(("warm_probe_engine", "no_such_module_xyz"))
     assert "warm_probe_library" in sys.modules and "warm_probe_absent" not in sys.modules
+
+
+NEEDY_MODULE = '''
+from engines.base import Engine
+class Needy(Engine):
+    """Cannot be built without its file (as the fmu engine without its FMU)."""
+    name = "needy"
+    capabilities = frozenset({"mass_matrix"})
+    required_options = ("path",)
+    def __init__(self, model, path=None):
+        super().__init__(model)
+        self.path = path
+    def mass_matrix(self, q):
+        return self.model.mass_matrix(q)
+'''
+
+
+def test_an_engine_that_needs_an_option_is_in_no_default_list(tmp_path, monkeypatch):
+    """Registered, installed, with terms, but declaring required_options: run's default, the
+    conformance suite's and diagnose's leave it out (built there without its file it would be
+    dropped with a usage error, and a default run would say SOMETHING FAILED); named, it is
+    still available. Planted and failing: default_engines returning every registered engine."""
+    from comparisons.conformance.plugin import default_engines as conformance_defaults
+    from engines import default_engines
+    from engines.defaults import term_engines
+    (tmp_path / "needy_mod.py").write_text(NEEDY_MODULE)
+    _dist_info(tmp_path, "needy-engines", "1.0", {"needy": "needy_mod:Needy",
+                                                   "fake": "fake_engine_mod:FakeEngine"})
+    (tmp_path / "fake_engine_mod.py").write_text(FAKE_MODULE)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "needy" in available_engines()
+    assert "needy" not in default_engines() and "fake" in default_engines()
+    assert "needy" not in conformance_defaults() and "fake" in conformance_defaults()
+    assert "needy" not in term_engines("thesis") and "fake" in term_engines("thesis")

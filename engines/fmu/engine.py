@@ -89,6 +89,7 @@ class FmuEngine(Engine):
     name = "fmu"
     capabilities = frozenset({"forward_acceleration", "simulate"})
     label = "FMU"
+    required_options = ("fmu",)     # no default engine list includes it
     colour = "tab:olive"
     marker = "P"
     run_setups = (RunSetup(settings="the FMU's derivatives integrated by the reference's "
