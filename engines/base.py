@@ -86,6 +86,10 @@ class Engine:
     #: judged by the ideal-rolling tolerances: its departures (slip, penetration, error up to
     #: the meaningful horizon, lift-off) are measured and reported as that difference.
     run_difference: str | None = None
+    #: options the engine cannot be built without (e.g. a file): it is left out of every
+    #: default engine list (run's, diagnose's, the conformance suite's) and built only when
+    #: named with them
+    required_options: tuple[str, ...] = ()
 
     # -- the engine's facts (`engines.facts`; docs/engines.md, "An engine's facts") ----------
     #: how reports and figures name and draw the engine ("" : its registered name); a

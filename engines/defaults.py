@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from .base import EngineError
 from .facts import EngineFacts, engine_facts
-from .registry import available_engines
+from .registry import available_engines, needs_options
 
 __all__ = ["REFERENCE", "installed_engines", "installed_facts", "term_engines"]
 
@@ -44,6 +44,7 @@ def installed_engines() -> tuple[str, ...]:
 
 def term_engines(contact: str | None = None) -> tuple[str, ...]:
     """The installed engines other than the reference that compute terms (a capability beyond
-    ``simulate``), and, given ``contact``, model that front contact."""
+    ``simulate``), and, given ``contact``, model that front contact; not those that cannot be
+    built without an option (`registry.needs_options`)."""
     return tuple(f.name for f in installed_facts() if f.name != REFERENCE and f.has_terms
-                 and (contact is None or contact in f.contacts))
+                 and (contact is None or contact in f.contacts) and not needs_options(f.name))

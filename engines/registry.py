@@ -47,10 +47,10 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from .base import Engine, EngineLoadError, EngineSpecError
+from .base import Engine, EngineError, EngineLoadError, EngineSpecError
 
 __all__ = ["DISTRIBUTION", "GROUP", "SPEC_FORMS", "EngineNotInstalled", "Registration",
-           "available_engines", "default_engines", "missing_modules", "not_installed", "registrations", "resolve"]
+           "available_engines", "default_engines", "missing_modules", "needs_options", "not_installed", "registrations", "resolve"]
 
 GROUP = "bicycle_xval.engines"
 DISTRIBUTION = "bicycle-xval"
@@ -133,9 +133,20 @@ def _canonical(dist: str | None) -> str:
 
 def default_engines() -> tuple[str, ...]:
     """The engines a run compares when none is named: every registered engine (an engine whose
-    extra is not installed is then listed as not run, with its pip line). The one declared
-    place of that default."""
-    return available_engines()
+    extra is not installed is then listed as not run, with its pip line) but those that cannot
+    be built without an option (`needs_options`). The one declared place of that default."""
+    return tuple(e for e in available_engines() if not needs_options(e))
+
+
+def needs_options(name: str) -> bool:
+    """True when the registered engine ``name`` declares options it cannot be built without
+    (``required_options``, e.g. a file): no default list includes it. An engine that does
+    not import counts as not needing any (it is listed as not installed or failed)."""
+    try:
+        cls = resolve(name)[0]
+    except EngineError:
+        return False
+    return bool(getattr(cls, "required_options", ()))
 
 
 def available_engines() -> tuple[str, ...]:

@@ -88,6 +88,7 @@ def test_builtins_come_from_the_pyproject_declaration():
                     "pinocchio": "engines.pinocchio:PinocchioEngine",
                     "exudyn": "engines.exudyn:ExudynEngine",
                     "kane": "engines.kane:KaneEngine",
+                    "fmu": "engines.fmu:FmuEngine",
                     "mujoco": "engines.mujoco:MujocoEngine",
                     "dart": "engines.dart:DartEngine",
                     "drake": "engines.drake:DrakeEngine"}
@@ -351,3 +352,37 @@ def test_registrations_are_read_once_per_import_path(tmp_path, monkeypatch):
     assert len(scans) == 1
     monkeypatch.undo()
     assert "cached" not in available_engines()
+
+
+NEEDY_MODULE = '''
+from engines.base import Engine
+class Needy(Engine):
+    """Cannot be built without its file (as the fmu engine without its FMU)."""
+    name = "needy"
+    capabilities = frozenset({"mass_matrix"})
+    required_options = ("path",)
+    def __init__(self, model, path=None):
+        super().__init__(model)
+        self.path = path
+    def mass_matrix(self, q):
+        return self.model.mass_matrix(q)
+'''
+
+
+def test_an_engine_that_needs_an_option_is_in_no_default_list(tmp_path, monkeypatch):
+    """Registered, installed, with terms, but declaring required_options: run's default, the
+    conformance suite's and diagnose's leave it out (built there without its file it would be
+    dropped with a usage error, and a default run would say SOMETHING FAILED); named, it is
+    still available. Planted and failing: default_engines returning every registered engine."""
+    from comparisons.conformance.plugin import default_engines as conformance_defaults
+    from engines import default_engines
+    from engines.defaults import term_engines
+    (tmp_path / "needy_mod.py").write_text(NEEDY_MODULE)
+    _dist_info(tmp_path, "needy-engines", "1.0", {"needy": "needy_mod:Needy",
+                                                   "fake": "fake_engine_mod:FakeEngine"})
+    (tmp_path / "fake_engine_mod.py").write_text(FAKE_MODULE)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "needy" in available_engines()
+    assert "needy" not in default_engines() and "fake" in default_engines()
+    assert "needy" not in conformance_defaults() and "fake" in conformance_defaults()
+    assert "needy" not in term_engines("thesis") and "fake" in term_engines("thesis")

@@ -42,6 +42,22 @@ def _write_description(fmt: str):
     return write
 
 
+def _write_fmu(model, out: Path) -> str:
+    from reference_model.exports.fmu import FmuExportError, write_fmu
+    try:
+        write_fmu(model, out)
+    except FmuExportError as exc:
+        raise UsageError(str(exc)) from None
+    return f"{model.name!r} as a Model-Exchange FMU (FMI 2.0) -> {out}"
+
+
+def _write_fmu_mapping(model, out: Path) -> str:
+    from reference_model.exports.fmu import mapping_text
+    from reference_model.parameters.benchmark_files import _write_atomically
+    _write_atomically(out, mapping_text(None), parents=False)
+    return f"the fmu engine's mapping template (the names bicycle-xval's FMU uses) -> {out}"
+
+
 EXPORT_FORMATS: dict[str, ExportFormat] = {f.name: f for f in (
     ExportFormat("benchmark", "Meijaard et al. (2007) Table 1 names (.toml, .json or "
                  "BicycleParameters' .txt by the suffix of --out)", (".toml", ".json", ".txt"),
@@ -54,6 +70,12 @@ EXPORT_FORMATS: dict[str, ExportFormat] = {f.name: f for f in (
                  "the file says so)", (".xml", ".mjcf"), _write_description("mjcf")),
     ExportFormat("json", "everything, the rolling-contact constraints included, for any engine",
                  (".json",), _write_description("json")),
+    ExportFormat("fmu", "a Model-Exchange FMU (FMI 2.0) of the reference, its generated C "
+                 "compiled with gcc; Baumgarte a1 = a2 = 10 as parameters (docs/engines.md)",
+                 (".fmu",), _write_fmu),
+    ExportFormat("fmu-mapping", "the fmu engine's mapping template: FMU variable names -> the "
+                 "thesis's coordinates, torques and units, to edit for another tool's FMU",
+                 (".toml",), _write_fmu_mapping),
 )}
 
 

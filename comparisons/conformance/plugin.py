@@ -104,10 +104,11 @@ def pytest_addoption(parser):
 def default_engines() -> list[str]:
     """Every registered engine but the reference (which every check compares against): an
     engine whose extra is missing stays in the list, so the header says it was not checked and
-    why."""
+    why; one that cannot be built without an option (a file) is left out."""
     from engines import available_engines
     from engines.defaults import REFERENCE
-    return [e for e in available_engines() if e != REFERENCE]
+    from engines.registry import needs_options
+    return [e for e in available_engines() if e != REFERENCE and not needs_options(e)]
 
 
 def read_xfails(path: Path) -> dict[str, str]:

@@ -239,17 +239,19 @@ def trajectory_result(fault: Fault, model: Model, engine, faulty: Model | None =
 def run_fault_suite(engines: Sequence[str], n_states: int = DEFAULT_FAULT_STATES,
                     base: str = "thesis", faults: Sequence[str] | None = None,
                     seed: int = DEFAULT_SEED, *,
-                    tolerances: Mapping[str, Tolerance]) -> list[FaultResult]:
+                    tolerances: Mapping[str, Tolerance],
+                    options: Mapping[str, Mapping] | None = None) -> list[FaultResult]:
     """Run every fault (or the named ones) against engines built from the correct ``base``
-    model, judged by ``tolerances``. The engines' terms are evaluated once and shared by every
-    fault."""
+    model, judged by ``tolerances``; ``options``: an engine's spec -> its options (an engine
+    that needs one, e.g. a file, cannot be built without). The engines' terms are evaluated
+    once and shared by every fault."""
     chosen = list(FAULTS) if faults is None else list(faults)
     unknown = [f for f in chosen if f not in FAULTS]
     if unknown:
         raise ValueError(f"unknown fault {unknown[0]!r}; choose from {', '.join(FAULTS)}")
     model = load_model(base)
     states = random_states(n_states, seed=seed)
-    built = [load_engine(name, model) for name in engines]
+    built = [load_engine(name, model, **dict((options or {}).get(name, {}))) for name in engines]
     values = {e.name: engine_terms(e, states) for e in built}
     observable = sorted({t for v in values.values() for t in v})
     results = []

@@ -19,12 +19,13 @@ def fault_base(engine: str) -> str:
     return "thesis" if "thesis" in engine_facts(engine).contacts else "thesis-disc"
 
 
-def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None) -> list[dict]:
+def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None,
+                  options: tuple = ()) -> list[dict]:
     """The fault suite against one engine, judged by ``tolerances`` (a stage: worker processes
     call it). Every fault the engine's declared terms can show must be detected and localized
     on it; a fault confined to terms it does not provide (e.g. the contact switch, which moves
     only D and dD dq, on an engine that gives M and the forces alone) is not observable there
-    and is listed as such, not counted as missed."""
+    and is listed as such, not counted as missed. ``options``: the engine's (key, value) pairs."""
     from engines import UnsupportedModel
     from reference_model import load_model
 
@@ -34,7 +35,8 @@ def fault_entries(tolerances: Tolerances, engine: str, model: str | None = None)
     base = fault_base(engine) if model is None else model
     name = load_model(base).name
     try:
-        results = run_fault_suite(engines=(engine,), base=base, tolerances=tolerances)
+        results = run_fault_suite(engines=(engine,), base=base, tolerances=tolerances,
+                                  options={engine: dict(options)})
     except UnsupportedModel as exc:   # the engine cannot represent this bicycle: declared
         return [{"fault": "-", "engine": label, "model": name, "detected": None,
                  "localized_to": "-", "expected": "-", "correct": None, "observable": False,
@@ -78,13 +80,14 @@ class FaultsStage(Stage):
         from .pool import Task
         out = []
         for f in plan.engines(lambda f: f.has_terms):
+            opts = tuple(plan.options_for(f.spec).items())
             if not plan.opts.models:
-                out.append(Task((f.spec, None), fault_entries, (plan.tolerances, f.spec),
+                out.append(Task((f.spec, None), fault_entries, (plan.tolerances, f.spec, None, opts),
                                 f.costs.faults, f"fault injection on {f.label}", f.spec))
             for m in plan.opts.models:
                 if m.contact in f.contacts:
                     out.append(Task((f.spec, m.spec), fault_entries,
-                                    (plan.tolerances, f.spec, m.spec), f.costs.faults,
+                                    (plan.tolerances, f.spec, m.spec, opts), f.costs.faults,
                                     f"{m.name}: fault injection on {f.label}", f.spec))
         return out
 

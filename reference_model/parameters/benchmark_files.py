@@ -272,15 +272,17 @@ def import_benchmark(
     return ImportedBicycle(params, text, read.notes)
 
 
-def _write_atomically(out: Path, text: str, parents: bool = True) -> None:
-    """Write ``text`` to ``out`` via a temporary file in the same folder and a rename, so a
-    failure never leaves a half-written file. The file gets the mode of any new file (0666
-    less the umask), not the temporary's private 0600. ``parents``: create missing folders."""
+def _write_atomically(out: Path, text: str | bytes, parents: bool = True) -> None:
+    """Write ``text`` (or bytes) to ``out`` via a temporary file in the same folder and a
+    rename, so a failure never leaves a half-written file. The file gets the mode of any new
+    file (0666 less the umask), not the temporary's private 0600. ``parents``: create missing
+    folders."""
     if parents:
         out.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+        with (os.fdopen(fd, "wb") if isinstance(text, bytes) else
+              os.fdopen(fd, "w", encoding="utf-8")) as handle:
             handle.write(text)
         mask = os.umask(0o022)
         os.umask(mask)

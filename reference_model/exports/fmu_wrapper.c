@@ -1,0 +1,316 @@
+/* Template of the FMI 2.0 Model-Exchange wrapper around the reference's generated C.
+ * reference_model/exports/fmu.py fills in the @NAME@ fields and compiles the result with the
+ * generated bicycle_generated.c (which #includes runtime.c) and the FMI headers; the filled-in
+ * file ships in the FMU's sources/ and is never committed.
+ *
+ * Value references (@LAYOUT@):
+ *   q (8) | dq (8) | der(q) (8) | der(dq) (8) | T (3) | C (5) | lambda (5) | p (30) | a1, a2
+ *   | the terms: M (64) | F = Qv + Qgrav + Qaero (8) | S (24) | Qgrav (8) | D (40) | dD dq (5)
+ * der(dq) and lambda are bx_forward's (runtime.c): [M D'; D 0][ddq; lambda] =
+ * [F + S T; -dD dq - 2 a1 D dq - a2^2 C], Baumgarte with the a1, a2 parameters. */
+#include <stdlib.h>
+#include <string.h>
+#include <stdio.h>
+#include "fmi2Functions.h"
+#include "bicycle_generated.c"
+
+#define GUID "@GUID@"
+#define COSIMULATION @COSIMULATION@   /* 1: also Co-Simulation, fixed-step RK4 (fmi2DoStep) */
+#define CS_STEP @CS_STEP@
+#define VR_Q 0
+#define VR_DQ 8
+#define VR_DERQ 16
+#define VR_DERDQ 24
+#define VR_T 32
+#define VR_C 35
+#define VR_LAM 40
+#define VR_P 45
+#define N_P @N_P@
+#define VR_A1 (VR_P + N_P)
+#define VR_A2 (VR_A1 + 1)
+#define VR_TERMS (VR_A2 + 1)
+#define N_TERMS (NQ * NQ + NQ + NQ * 3 + NQ + NC * NQ + NC)
+#define N_VR (VR_TERMS + N_TERMS)
+
+static const double P_START[N_P] = {@P_START@};
+static const double X_START[2 * NQ] = {@X_START@};
+
+typedef struct {
+    double q[NQ], dq[NQ], T[3], p[N_P], a1, a2, time;
+    double ddq[NQ], lam[NC], C[NC], terms[N_TERMS];
+    int dirty, status;
+    fmi2CallbackFunctions cb;
+    fmi2String name;
+} Bicycle;
+
+static void logf_(Bicycle *b, fmi2Status s, const char *msg)
+{
+    if (b->cb.logger) b->cb.logger(b->cb.componentEnvironment, b->name, s, "logError", msg);
+}
+
+static void reset(Bicycle *b)
+{
+    memcpy(b->q, X_START, sizeof b->q);
+    memcpy(b->dq, X_START + NQ, sizeof b->dq);
+    memset(b->T, 0, sizeof b->T);
+    memcpy(b->p, P_START, sizeof b->p);
+    b->a1 = @A1@;
+    b->a2 = @A2@;
+    b->time = 0.0;
+    b->dirty = 1;
+}
+
+/* Everything the outputs and derivatives read, once per change of inputs or states. */
+static void evaluate(Bicycle *b)
+{
+    if (!b->dirty) return;
+    double dyn[DYN_SIZE], con[CON_SIZE], grav[NQ];
+    b->status = bx_forward(b->q, b->dq, b->T, b->p, b->a1, b->a2, b->ddq, b->lam);
+    bx_dynamics(b->q, b->dq, b->p, dyn);
+    bx_constraints(b->q, b->dq, b->p, con);
+    bx_qgrav_batch(1, b->q, b->dq, b->p, grav);
+    memcpy(b->C, con, sizeof b->C);
+    double *t = b->terms;
+    memcpy(t, dyn, sizeof(double) * (NQ * NQ + NQ + NQ * 3)); t += NQ * NQ + NQ + NQ * 3;
+    memcpy(t, grav, sizeof grav); t += NQ;
+    memcpy(t, con + NC, sizeof(double) * (NC * NQ + NC));
+    b->dirty = 0;
+}
+
+static double *slot(Bicycle *b, fmi2ValueReference vr)
+{
+    if (vr < VR_DQ) return b->q + vr;
+    if (vr < VR_DERQ) return b->dq + (vr - VR_DQ);
+    if (vr < VR_T) return NULL;          /* der(q), der(dq): computed */
+    if (vr < VR_C) return b->T + (vr - VR_T);
+    if (vr < VR_P) return NULL;
+    if (vr < VR_A1) return b->p + (vr - VR_P);
+    if (vr == VR_A1) return &b->a1;
+    if (vr == VR_A2) return &b->a2;
+    return NULL;
+}
+
+static int value(Bicycle *b, fmi2ValueReference vr, double *out)
+{
+    if (vr >= N_VR) return 0;
+    if (vr >= VR_DERQ && vr < VR_DERDQ) { *out = b->dq[vr - VR_DERQ]; return 1; }
+    if ((vr >= VR_DERDQ && vr < VR_T) || (vr >= VR_C && vr < VR_P) || vr >= VR_TERMS) {
+        evaluate(b);
+        if (vr >= VR_TERMS) *out = b->terms[vr - VR_TERMS];
+        else if (vr >= VR_LAM) *out = b->lam[vr - VR_LAM];
+        else if (vr >= VR_C) *out = b->C[vr - VR_C];
+        else *out = b->ddq[vr - VR_DERDQ];
+        return 1;
+    }
+    double *s = slot(b, vr);
+    if (!s) return 0;
+    *out = *s;
+    return 1;
+}
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cat[])
+{
+    (void)c; (void)on; (void)n; (void)cat;
+    return fmi2OK;
+}
+
+fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, fmi2String location,
+                              const fmi2CallbackFunctions *cb, fmi2Boolean visible, fmi2Boolean logging)
+{
+    (void)location; (void)visible; (void)logging;
+    int kind_ok = type == fmi2ModelExchange || (COSIMULATION && type == fmi2CoSimulation);
+    if (!kind_ok || !guid || strcmp(guid, GUID) != 0) {
+        if (cb && cb->logger)
+            cb->logger(cb->componentEnvironment, name, fmi2Error, "logError",
+                       !kind_ok ? "this FMU does not provide that interface"
+                                : "GUID does not match the modelDescription");
+        return NULL;
+    }
+    Bicycle *b = calloc(1, sizeof *b);
+    if (!b) return NULL;
+    if (cb) b->cb = *cb;
+    b->name = name;
+    reset(b);
+    return b;
+}
+
+void fmi2FreeInstance(fmi2Component c) { free(c); }
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, fmi2Real tol, fmi2Real start,
+                               fmi2Boolean stopDef, fmi2Real stop)
+{
+    (void)tolDef; (void)tol; (void)stopDef; (void)stop;
+    ((Bicycle *)c)->time = start;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) { (void)c; return fmi2OK; }
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) { (void)c; return fmi2OK; }
+fmi2Status fmi2Terminate(fmi2Component c) { (void)c; return fmi2OK; }
+fmi2Status fmi2Reset(fmi2Component c) { reset((Bicycle *)c); return fmi2OK; }
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real v[])
+{
+    Bicycle *b = c;
+    for (size_t i = 0; i < n; ++i)
+        if (!value(b, vr[i], &v[i])) { logf_(b, fmi2Error, "fmi2GetReal: unknown value reference"); return fmi2Error; }
+    return b->status ? fmi2Error : fmi2OK;
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real v[])
+{
+    Bicycle *b = c;
+    for (size_t i = 0; i < n; ++i) {
+        double *s = slot(b, vr[i]);
+        if (!s) { logf_(b, fmi2Error, "fmi2SetReal: not a state, input or parameter"); return fmi2Error; }
+        *s = v[i];
+    }
+    b->dirty = 1;
+    return fmi2OK;
+}
+
+static fmi2Status none_(fmi2Component c, size_t n)
+{
+    if (n == 0) return fmi2OK;
+    logf_(c, fmi2Error, "this FMU has only Real variables");
+    return fmi2Error;
+}
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer v[]) { (void)vr; (void)v; return none_(c, n); }
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean v[]) { (void)vr; (void)v; return none_(c, n); }
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String v[]) { (void)vr; (void)v; return none_(c, n); }
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer v[]) { (void)vr; (void)v; return none_(c, n); }
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Boolean v[]) { (void)vr; (void)v; return none_(c, n); }
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[]) { (void)vr; (void)v; return none_(c, n); }
+
+/* canGetAndSetFMUstate, canSerializeFMUstate, providesDirectionalDerivative: all false */
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) { (void)c; (void)s; return fmi2Error; }
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) { (void)c; (void)s; return fmi2Error; }
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) { (void)c; (void)s; return fmi2Error; }
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *n) { (void)c; (void)s; (void)n; return fmi2Error; }
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t n) { (void)c; (void)s; (void)b; (void)n; return fmi2Error; }
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t n, fmi2FMUstate *s) { (void)c; (void)b; (void)n; (void)s; return fmi2Error; }
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
+                                        const fmi2ValueReference z[], size_t nz,
+                                        const fmi2Real du[], fmi2Real dz[])
+{ (void)c; (void)u; (void)nu; (void)z; (void)nz; (void)du; (void)dz; return fmi2Error; }
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi2OK; }
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
+{
+    (void)c;
+    e->newDiscreteStatesNeeded = fmi2False;
+    e->terminateSimulation = fmi2False;
+    e->nominalsOfContinuousStatesChanged = fmi2False;
+    e->valuesOfContinuousStatesChanged = fmi2False;
+    e->nextEventTimeDefined = fmi2False;
+    e->nextEventTime = 0.0;
+    return fmi2OK;
+}
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { (void)c; return fmi2OK; }
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSet, fmi2Boolean *enter, fmi2Boolean *term)
+{
+    (void)c; (void)noSet;
+    *enter = fmi2False;
+    *term = fmi2False;
+    return fmi2OK;
+}
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real t) { ((Bicycle *)c)->time = t; return fmi2OK; }
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n)
+{
+    Bicycle *b = c;
+    if (n != 2 * NQ) return fmi2Error;
+    memcpy(b->q, x, sizeof b->q);
+    memcpy(b->dq, x + NQ, sizeof b->dq);
+    b->dirty = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t n)
+{
+    Bicycle *b = c;
+    if (n != 2 * NQ) return fmi2Error;
+    memcpy(x, b->q, sizeof b->q);
+    memcpy(x + NQ, b->dq, sizeof b->dq);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t n)
+{
+    Bicycle *b = c;
+    if (n != 2 * NQ) return fmi2Error;
+    evaluate(b);
+    memcpy(dx, b->dq, sizeof b->dq);
+    memcpy(dx + NQ, b->ddq, sizeof b->ddq);
+    if (b->status) {
+        logf_(b, fmi2Error, b->status == 1 ? "singular mass or constraint system" : "non-finite state");
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t n) { (void)c; (void)z; return n ? fmi2Error : fmi2OK; }
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t n)
+{
+    (void)c;
+    for (size_t i = 0; i < n; ++i) x[i] = 1.0;
+    return fmi2OK;
+}
+
+/* -- Co-Simulation (when COSIMULATION): classical RK4 at steps of at most CS_STEP seconds, the
+ * inputs held over a communication step. */
+static int rk4(Bicycle *b, double h)
+{
+    double y[2 * NQ], k[4][2 * NQ];
+    memcpy(y, b->q, sizeof b->q);
+    memcpy(y + NQ, b->dq, sizeof b->dq);
+    static const double c[4] = {0.0, 0.5, 0.5, 1.0};
+    for (int s = 0; s < 4; ++s) {
+        for (int i = 0; i < 2 * NQ; ++i) {
+            double yi = y[i] + (s ? c[s] * h * k[s - 1][i] : 0.0);
+            if (i < NQ) b->q[i] = yi; else b->dq[i - NQ] = yi;
+        }
+        b->dirty = 1;
+        evaluate(b);
+        if (b->status) return b->status;
+        memcpy(k[s], b->dq, sizeof b->dq);
+        memcpy(k[s] + NQ, b->ddq, sizeof b->ddq);
+    }
+    for (int i = 0; i < 2 * NQ; ++i) {
+        double yi = y[i] + h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
+        if (i < NQ) b->q[i] = yi; else b->dq[i - NQ] = yi;
+    }
+    b->dirty = 1;
+    return 0;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real dt, fmi2Boolean noSetPrior)
+{
+    Bicycle *b = c;
+    (void)noSetPrior;
+    int n = (int)ceil(dt / CS_STEP - 1e-9);
+    if (n < 1) n = 1;
+    for (int i = 0; i < n; ++i)
+        if (rk4(b, dt / n)) { logf_(b, fmi2Error, "fmi2DoStep: singular system or non-finite state"); return fmi2Error; }
+    b->time = t + dt;
+    return fmi2OK;
+}
+fmi2Status fmi2CancelStep(fmi2Component c) { (void)c; return fmi2Error; }
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer o[], const fmi2Real v[])
+{ (void)vr; (void)o; (void)v; return none_(c, n); }
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer o[], fmi2Real v[])
+{ (void)vr; (void)o; (void)v; return none_(c, n); }
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind k, fmi2Status *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind k, fmi2Real *v)
+{
+    if (k != fmi2LastSuccessfulTime) return fmi2Discard;
+    *v = ((Bicycle *)c)->time;
+    return fmi2OK;
+}
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind k, fmi2Integer *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind k, fmi2Boolean *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind k, fmi2String *v) { (void)c; (void)k; (void)v; return fmi2Discard; }
