@@ -88,7 +88,8 @@ def test_builtins_come_from_the_pyproject_declaration():
                     "pinocchio": "engines.pinocchio:PinocchioEngine",
                     "exudyn": "engines.exudyn:ExudynEngine",
                     "kane": "engines.kane:KaneEngine",
-                    "mujoco": "engines.mujoco:MujocoEngine"}
+                    "mujoco": "engines.mujoco:MujocoEngine",
+                    "symbrim": "engines.symbrim:SymbrimEngine"}
 
 
 def test_builtin_info_lists_capabilities_contacts_and_options():
