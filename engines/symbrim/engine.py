@@ -14,26 +14,51 @@ derivations is wrong.
 
 SymBRiM's knife edge touches the ground at the disc's lowest point: the thesis's rim-point
 contact is refused (`CapabilityError`).
+
+Option ``crown_radius`` (m, default 0): the front wheel is SymBRiM's `ToroidalWheel`, a tyre
+whose crown is a circle of that radius (its contact point is the torus's lowest point), with
+the major radius ``R_front - crown_radius`` so that the hub stands at R_front when upright, as
+the reference's. With 0 it is the disc exactly (the same generated equations' toroidal
+variant, checked against the reference); with > 0 it is another bicycle, a model difference
+(the front contact moves sideways with lean), not an error of either.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from reference_model import Model
 
-from ..base import CapabilityError, Engine
+from ..base import CapabilityError, Engine, EngineSpecError
 from ..facts import Costs, RunSetup
 from ..kane.engine import KaneEngine, moore_parameters
+from ..kane.names import MOORE_PARAMETERS
 from . import codegen
 
 __all__ = ["SymbrimEngine", "symbrim_parameters"]
 
 
-def symbrim_parameters(params) -> np.ndarray:
+def symbrim_parameters(params, crown_radius: float = 0.0) -> np.ndarray:
     """The generated code's parameter vector: Moore's (`moore_parameters`), then the front
-    tyre's crown radius (0: the knife edge, which does not read it)."""
-    return np.r_[moore_parameters(params), 0.0]
+    tyre's crown radius (0: the knife edge, which does not read it). With a crown, Moore's
+    rf is the torus's major radius, R_front - crown_radius (the hub's height unchanged)."""
+    p = np.r_[moore_parameters(params), float(crown_radius)]
+    p[MOORE_PARAMETERS.index("rf")] -= crown_radius
+    return p
+
+
+def _crown(value, R_front: float) -> float:
+    try:
+        c = float(value)
+    except (TypeError, ValueError):
+        c = math.nan
+    if not (0.0 <= c < R_front):
+        raise EngineSpecError(f"engine option crown_radius = {value!r}: give the front tyre's "
+                              f"crown radius in metres, 0 <= crown_radius < R_front "
+                              f"({R_front} m)")
+    return c
 
 
 class SymbrimEngine(KaneEngine):
@@ -58,7 +83,7 @@ class SymbrimEngine(KaneEngine):
         fork."""
         codegen.load()
 
-    def __init__(self, model: Model):
+    def __init__(self, model: Model, crown_radius: float = 0.0):
         if model.contact not in self.contacts:
             raise CapabilityError(
                 f"engine 'symbrim' cannot use the front contact {model.contact!r}: SymBRiM's "
@@ -66,6 +91,7 @@ class SymbrimEngine(KaneEngine):
                 "thesis's rim point along the fork's -z; use a disc-contact model (e.g. "
                 "thesis-disc)")
         Engine.__init__(self, model)
-        self.p = symbrim_parameters(model.params)
-        self.code = codegen.load()
+        self.crown_radius = _crown(crown_radius, model.params.R_front)
+        self.p = symbrim_parameters(model.params, self.crown_radius)
+        self.code = codegen.load(front_crown=self.crown_radius > 0)
         self.params, self.contact = model.params, model.contact
