@@ -25,7 +25,8 @@ does on its own tree (`engines.kane.derivation`):
 
 SymBRiM's own constraint equations (`System.holonomic_constraints`,
 `nonholonomic_constraints`) are not used for the rows: they are the same conditions in
-another basis; `tests/test_symbrim.py` checks that they vanish where these rows do.
+another basis (its contact points are the ones used here). The rows' agreement with the
+reference's, and SymBRiM's body points with the reference's, are tests/test_symbrim.py's.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ import sympy.physics.mechanics as me
 from ..kane.derivation import KaneDerivation
 from ..kane.names import MOORE_PARAMETERS, TORQUES
 
-__all__ = ["EXTRA_PARAMETERS", "build_bicycle", "derive"]
+__all__ = ["EXTRA_PARAMETERS", "build_bicycle", "derive", "parameter_symbols"]
 
 #: Parameters after Moore's: the front tyre's crown (transverse) radius (0 without the option).
 EXTRA_PARAMETERS: tuple[str, ...] = ("tr",)
