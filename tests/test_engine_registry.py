@@ -91,7 +91,8 @@ def test_builtins_come_from_the_pyproject_declaration():
                     "fmu": "engines.fmu:FmuEngine",
                     "mujoco": "engines.mujoco:MujocoEngine",
                     "dart": "engines.dart:DartEngine",
-                    "drake": "engines.drake:DrakeEngine"}
+                    "drake": "engines.drake:DrakeEngine",
+                    "symbrim": "engines.symbrim:SymbrimEngine"}
 
 
 def test_builtin_info_lists_capabilities_contacts_and_options():

@@ -134,7 +134,7 @@ def test_every_section_runs_on_each_bicycle(report, name):
         assert any(t.startswith(start) and t.endswith(end) for t in titles), (start, end)
     faults = [f for f in report["summary"]["faults"] if f["model"] == bike]
     engines = {f["engine"] for f in faults}
-    assert engines == {"pinocchio", "exudyn", "kane", "mujoco"}, engines
+    assert engines >= {"pinocchio", "exudyn", "kane", "mujoco"}, engines   # and any registered since
     term_rows = [c for c in report["summary"]["comparisons"]
                  if c["model"] == bike and c["scenario"].startswith("random-states")]
     assert {c["engines"][1] for c in term_rows} >= {"pinocchio", "exudyn", "kane"}

@@ -212,10 +212,9 @@ class KaneEngine(Engine):
         _same(qa, da, "q and dq")
         return qm, rates_to_moore(da), one
 
-    @staticmethod
-    def _out(x: np.ndarray, one: bool) -> np.ndarray:
+    def _out(self, x: np.ndarray, one: bool) -> np.ndarray:
         if not np.all(np.isfinite(x)):
-            raise ArithmeticError("engine 'kane': a non-finite value at this state")
+            raise ArithmeticError(f"engine '{self.name}': a non-finite value at this state")
         return x[0] if one else x
 
     def _generated(self, name: str, shape: tuple[int, int], qm: np.ndarray,
@@ -310,7 +309,7 @@ class KaneEngine(Engine):
         if res.status.any():
             k = int(np.flatnonzero(res.status)[0])
             raise ArithmeticError(
-                f"engine 'kane': at state {k} " + ("the constraints do not determine five "
+                f"engine '{self.name}': at state {k} " + ("the constraints do not determine five "
                                                    "speeds (a kinematic singularity)"
                                                    if res.status[k] == 1 else
                                                    "the state is not finite"))

@@ -1,0 +1,17 @@
+"""Moore's Whipple bicycle from SymBRiM's published parts (TU Delft's bicycle-rider modelling
+library) as an engine.
+
+SymBRiM is not part of bicycle-xval's core: ``pip install 'bicycle-xval[symbrim]'``. Without it
+this package still imports (without `SymbrimEngine`), so the registry lists the engine as not
+installed, with that line (``REQUIRES``/``EXTRA``: docs/engines.md)."""
+
+from ..registry import missing_modules
+
+#: the top-level modules the engine imports beyond the core, and the extra that installs them
+REQUIRES = ("symbrim",)
+EXTRA = "symbrim"
+
+if not missing_modules(REQUIRES):
+    from .engine import SymbrimEngine
+
+__all__ = ["EXTRA", "REQUIRES", "SymbrimEngine"]

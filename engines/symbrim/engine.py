@@ -1,0 +1,101 @@
+"""The `symbrim` engine: SymBRiM's Whipple bicycle (knife-edge wheels, flat ground) in the
+thesis's coordinates.
+
+SymBRiM's model (`engines.symbrim.derivation`) is in Moore's coordinates, as the Kane engine's
+own derivation is, and printed to the same five generated functions (`KaneDerivation`:
+unconstrained M and F, the constraint rows, their Jacobian and bias) by the Kane engine's
+printer and cache (`engines.symbrim.codegen`). Everything after that is the Kane engine's:
+the project's Moore <-> thesis mapping (`reference_model.moore`, ``u = T dq``), the parameter
+conversion (`engines.kane.moore_parameters`: the thesis's geometry and inertias as Moore's
+d1..d3, l1..l4 and the products' signs), the per-state elimination of the dependent speeds and
+the reference's solvers for runs. This class only swaps the equations: SymBRiM's instead of
+the project's own Kane derivation, so where the two engines disagree, one of the two
+derivations is wrong.
+
+SymBRiM's knife edge touches the ground at the disc's lowest point: the thesis's rim-point
+contact is refused (`CapabilityError`).
+
+Option ``crown_radius`` (m, default 0): the front wheel is SymBRiM's `ToroidalWheel`, a tyre
+whose crown is a circle of that radius (its contact point is the torus's lowest point), with
+the major radius ``R_front - crown_radius`` so that the hub stands at R_front when upright, as
+the reference's. With 0 it is the disc exactly (the same generated equations' toroidal
+variant, checked against the reference); with > 0 it is another bicycle, a model difference
+(the front contact moves sideways with lean), not an error of either.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from reference_model import Model
+
+from ..base import CapabilityError, Engine, EngineSpecError
+from ..facts import Costs, RunSetup
+from ..kane.engine import KaneEngine, moore_parameters
+from ..kane.names import MOORE_PARAMETERS
+from . import codegen
+
+__all__ = ["SymbrimEngine", "symbrim_parameters"]
+
+
+def symbrim_parameters(params, crown_radius: float = 0.0) -> np.ndarray:
+    """The generated code's parameter vector: Moore's (`moore_parameters`), then the front
+    tyre's crown radius (0: the knife edge, which does not read it). With a crown, Moore's
+    rf is the torus's major radius, R_front - crown_radius (the hub's height unchanged)."""
+    p = np.r_[moore_parameters(params), float(crown_radius)]
+    p[MOORE_PARAMETERS.index("rf")] -= crown_radius
+    return p
+
+
+def _crown(value, R_front: float) -> float:
+    try:
+        c = float(value)
+    except (TypeError, ValueError):
+        c = math.nan
+    if not (0.0 <= c < R_front):
+        raise EngineSpecError(f"engine option crown_radius = {value!r}: give the front tyre's "
+                              f"crown radius in metres, 0 <= crown_radius < R_front "
+                              f"({R_front} m)")
+    return c
+
+
+class SymbrimEngine(KaneEngine):
+    """SymBRiM's WhippleBicycleMoore with knife-edge wheels, generated numpy code, disc contact
+    only; the Kane engine's mapping, elimination and solvers."""
+
+    name = "symbrim"
+    label = "SymBRiM"
+    colour = "tab:pink"
+    marker = "X"
+    run_setups = (RunSetup(kinds=("forward",),
+                           settings="SymBRiM's Whipple bicycle (WhippleBicycleMoore, KnifeEdgeWheel, "
+                                    "NonHolonomicTire, FlatGround; sympy KanesMethod, generated "
+                                    "code, dependent speeds eliminated per state) in the "
+                                    "reference's solvers (same integrator and tolerances); disc "
+                                    "front contact only; no inverse dynamics"),)
+    # measured side by side with Kane's at a load of ~4: stability-psid5 2.5 s per simulated
+    # second against Kane's 4.0 (one state's forward 0.64 ms against 1.19 ms: SymBRiM's
+    # expressions print smaller), so 0.6 x Kane's declared 0.3 s; the cold derivation (35-50 s)
+    # is `prepare`'s, once per machine, and a cached load ~0.1 s (2.3 s with the machine loaded)
+    costs = Costs(run_per_second=0.2, short_run=0.8, terms=1.5, faults=2.0)
+
+    @classmethod
+    def prepare(cls) -> None:
+        """Derive and generate the code if the cache is cold (~40-60 s), once, before workers
+        fork."""
+        codegen.load()
+
+    def __init__(self, model: Model, crown_radius: float = 0.0):
+        if model.contact not in self.contacts:
+            raise CapabilityError(
+                f"engine 'symbrim' cannot use the front contact {model.contact!r}: SymBRiM's "
+                "knife-edge wheel touches the ground at the disc's lowest point, not at the "
+                "thesis's rim point along the fork's -z; use a disc-contact model (e.g. "
+                "thesis-disc)")
+        Engine.__init__(self, model)
+        self.crown_radius = _crown(crown_radius, model.params.R_front)
+        self.p = symbrim_parameters(model.params, self.crown_radius)
+        self.code = codegen.load(front_crown=self.crown_radius > 0)
+        self.params, self.contact = model.params, model.contact
