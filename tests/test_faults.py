@@ -303,3 +303,20 @@ def test_diagnose_parser_and_bad_inputs(tmp_path):
         diagnose(THESIS_FILE, engines=(), tolerances=TOLS)
     with pytest.raises(ValueError, match="n_states must be an integer >= 4"):
         diagnose(THESIS_FILE, engines=("pinocchio",), n_states=1, tolerances=TOLS)
+
+
+def test_expected_terms_drop_what_the_engines_cannot_show_and_qaero_without_drag(thesis):
+    """A fault's expected localization is restricted to the terms the engines provide, and
+    Qaero (proportional to cv) leaves it on a drag-free model (Fault.expected_terms' contract);
+    with none of its terms provided the fault is 'not observable'."""
+    import dataclasses
+    f = dataclasses.replace(FAULTS["I3xz-sign"], terms=("M", "Qv", "Qaero"))
+    p, dragless = thesis.params, thesis.params.replace(cv=0.0)
+    assert p.cv > 0.0
+    assert f.expected_terms(p) == ("M", "Qv", "Qaero")
+    assert f.expected_terms(dragless) == ("M", "Qv")
+    assert f.expected_terms(p, observable=("Qv", "Qaero", "D")) == ("Qv", "Qaero")
+    assert f.expected_terms(dragless, observable=("Qaero",)) == ()
+    assert f.expected(p, observable=("Qv",)).startswith("Qv via ")
+    assert f.expected(dragless, observable=("Qaero", "D")) == \
+        "not observable (changes only M, Qv, Qaero)"
