@@ -17,8 +17,8 @@ at the benchmark's weave speeds (~0.3 s), and ms for the rest. The whole run on 
 
 from __future__ import annotations
 
-import math
 import json
+import math
 
 import numpy as np
 import pytest
