@@ -48,11 +48,11 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/run.py
 
 # Mutation testing (not part of `make test`): mutmut, set up in pyproject.toml [tool.mutmut]
-# (which modules: the judgments, the sweep and stability stages, the solvers, the MJCF export,
-# the Exudyn mapping; which fast tests; why mutmut). Each run starts afresh (mutmut caches
-# results and would not notice changed tests); it prints the surviving mutants (`mutmut show
-# NAME` shows one) and the score. The whole set is ~7600 mutants, over an hour on the shared
-# 2-core machine (README, "Tests"); MUTANTS narrows it, e.g.
+# (which modules: every hand-written module of the judgments, the stages, the reference model
+# and the engines, generated code left out; which fast tests; why mutmut). Each run starts
+# afresh (mutmut caches results and would not notice changed tests); it prints the surviving
+# mutants (`mutmut show NAME` shows one) and the score. The whole set is several hours on the
+# shared 2-core machine (README, "Tests"); MUTANTS narrows it to a module or a few, e.g.
 # make mutants MUTANTS='comparisons.judgments.claims*'. Two worker processes (the machine's cores).
 MUTATION_STAMP = $(VENV)/.installed-mutation
 MUTANTS ?=

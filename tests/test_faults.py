@@ -303,3 +303,50 @@ def test_diagnose_parser_and_bad_inputs(tmp_path):
         diagnose(THESIS_FILE, engines=(), tolerances=TOLS)
     with pytest.raises(ValueError, match="n_states must be an integer >= 4"):
         diagnose(THESIS_FILE, engines=("pinocchio",), n_states=1, tolerances=TOLS)
+
+
+def test_expected_terms_drop_what_the_engines_cannot_show_and_qaero_without_drag(thesis):
+    """A fault's expected localization is restricted to the terms the engines provide, and
+    Qaero (proportional to cv) leaves it on a drag-free model (Fault.expected_terms' contract);
+    with none of its terms provided the fault is 'not observable'."""
+    import dataclasses
+    f = dataclasses.replace(FAULTS["I3xz-sign"], terms=("M", "Qv", "Qaero"))
+    p, dragless = thesis.params, thesis.params.replace(cv=0.0)
+    assert p.cv > 0.0
+    assert f.expected_terms(p) == ("M", "Qv", "Qaero")
+    assert f.expected_terms(dragless) == ("M", "Qv")
+    assert f.expected_terms(p, observable=("Qv", "Qaero", "D")) == ("Qv", "Qaero")
+    assert f.expected_terms(dragless, observable=("Qaero",)) == ()
+    assert f.expected(p, observable=("Qv",)).startswith("Qv via ")
+    assert f.expected(dragless, observable=("Qaero", "D")) == \
+        "not observable (changes only M, Qv, Qaero)"
+
+
+@pytest.mark.slow     # ~4 s at a load of 6: the localization's cause fit (make test-slow)
+def test_a_localization_is_correct_for_its_own_fault_only(thesis):
+    """judge's 'correct' is every condition at once: the I3xz sign flip's localization (M, Qv via
+    I3xz, body 3) is wrong for every other fault (other terms, cause or body), and the
+    unfaulted model's is 'not detected', judged on no failing quantity."""
+    from comparisons.judgments.diagnose import localize
+    from comparisons.judgments.faults import judge
+    from comparisons.judgments.terms import random_states
+    states = random_states(4, seed=0)
+    engine = load_engine("pinocchio", thesis)
+    values = {engine.name: engine_terms(engine, states)}
+    observable = sorted(values[engine.name])
+    loc = localize(FAULTS["I3xz-sign"].inject(thesis), states, [engine], values,
+                   tolerances=TOLS)
+    verdicts = {fid: judge(f, loc, ("pinocchio",), observable, thesis.params)
+                for fid, f in FAULTS.items()}
+    assert {fid for fid, r in verdicts.items() if r.correct} == {"I3xz-sign"}
+    assert all(r.detected for r in verdicts.values())
+    mine = verdicts["I3xz-sign"]
+    assert mine.observable and mine.engines == ("pinocchio",)
+    assert mine.evidence.startswith("mass_matrix vs pinocchio") and "> 1e-12 at M[" in mine.evidence
+    assert "fit: " in mine.evidence
+    clean = judge(FAULTS["I3xz-sign"], localize(thesis, states, [engine], values,
+                                                tolerances=TOLS),
+                  ("pinocchio",), observable, thesis.params)
+    assert not clean.detected and not clean.correct
+    assert clean.localized_to == "not detected"
+    assert clean.evidence == "every compared quantity agrees"

@@ -205,3 +205,17 @@ def test_linearization_at_5_m_s_is_the_printed_benchmark():
     C = V * printed["C1"]
     for got, expected in ((lin.K, K), (lin.C, C)):
         assert np.max(np.abs(got - expected)) <= TOL_K * np.max(np.abs(expected))
+
+
+def test_max_matched_error_matches_each_eigenvalue_once_relative_above_one():
+    """Worked by hand: each expected eigenvalue takes its nearest remaining one, the error is
+    relative where |expected| > 1 and absolute below, and a value once matched is gone."""
+    from comparisons.judgments.meijaard import max_matched_error
+    got = np.array([10.5, 1.1, 2 + 1j])
+    # 1 <-> 1.1: 0.1 / 1; 2+1j <-> 2+1j: 0; 10 <-> 10.5: 0.5 / 10
+    assert max_matched_error(np.array([1.0, 2 + 1j, 10.0]), got) == pytest.approx(0.1, rel=1e-12)
+    # 0.5 <-> 0.45: absolute 0.05 (|0.5| < 1)
+    assert max_matched_error(np.array([0.5]), np.array([0.45])) == pytest.approx(0.05, rel=1e-12)
+    # 1.2 cannot reuse 1.1 (taken by 1.0): it gets 5.0, 3.8 / 1.2
+    assert max_matched_error(np.array([1.0, 1.2]), np.array([1.1, 5.0])) == \
+        pytest.approx(3.8 / 1.2, rel=1e-12)

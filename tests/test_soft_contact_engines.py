@@ -18,6 +18,7 @@ at the benchmark's weave speeds (~0.3 s), and ms for the rest. The whole run on 
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -317,3 +318,20 @@ def test_the_stability_stage_runs_soft_contact_engines_in_full_runs_only():
                                 if t.key[0] == "run"})
     assert labels[False] == sorted(["reference", BUILT_IN, NAME])
     assert labels[True] == ["reference"]
+
+
+def test_a_rows_summary_entry_is_its_fields_under_summary_jsons_keys():
+    """summary.json's soft_contact_ranking entry (docs/report.md): each field under its key,
+    the run time per simulated second the wall time over the simulated time (2 s / 0.5 s)."""
+    from comparisons.judgments.contact_ranking import ContactRow
+    row = ContactRow(engine="mujoco", label="MuJoCo", model="thesis-disc", scenario="s",
+                     horizon=0.43, reached=True, error_at_horizon=1e-3, error_max=2e-3,
+                     slip_rms=3e-3, slip_max=4e-3, penetration_max=5e-4, penetration_rms=6e-4,
+                     lift_off_s=0.44, simulated_s=0.5, run_seconds=2.0, settings="h = 0.002")
+    assert row.as_dict() == {
+        "engine": "mujoco", "label": "MuJoCo", "reached_horizon": True,
+        "error_at_horizon": 1e-3, "error_max": 2e-3, "slip_rms": 3e-3, "slip_max": 4e-3,
+        "penetration_max": 5e-4, "penetration_rms": 6e-4, "lift_off_s": 0.44,
+        "run_time_per_simulated_second": 4.0, "settings": "h = 0.002"}
+    import dataclasses
+    assert math.isnan(dataclasses.replace(row, simulated_s=0.0).run_time_per_simulated_second)
