@@ -54,7 +54,8 @@ def warm_imports(names: tuple[str, ...] | None = None) -> None:
     """Import ``names`` (default: `BASE_IMPORTS` and `engine_imports`) so that forked workers
     inherit them instead of each importing them again (about a second of CPU per worker for
     the engines' libraries). A module that does not import is skipped (an engine whose library
-    is absent: its stage says so), and so is a declared ``REQUIRES`` that is not installed."""
+    is absent: its stage says so), and so is a declared ``REQUIRES`` (or ``WARM``) that is not
+    installed."""
     import importlib
 
     from engines.registry import missing_modules
@@ -63,7 +64,9 @@ def warm_imports(names: tuple[str, ...] | None = None) -> None:
             module = importlib.import_module(name)
         except Exception:   # noqa: BLE001 - an engine's library may be absent: its stage says so
             continue
-        requires = getattr(module, "REQUIRES", ())
+        # the libraries to warm: the package's WARM when it declares one (a library needed
+        # only on a cold cache, e.g. to derive equations, need not be), else its REQUIRES
+        requires = getattr(module, "WARM", getattr(module, "REQUIRES", ()))
         if isinstance(requires, str) or not isinstance(requires, (tuple, list)):
             continue        # malformed: the registry reports it when the engine is resolved
         for lib in requires:

@@ -10,8 +10,12 @@ from ..registry import missing_modules
 #: the top-level modules the engine imports beyond the core, and the extra that installs them
 REQUIRES = ("symbrim",)
 EXTRA = "symbrim"
+#: imported before `run`'s workers fork: nothing. symbrim (and sympy with it, 0.3-0.5 s) is
+#: needed only to derive the equations on a cold cache; the cached code needs neither, and the
+#: run path imports no sympy (tests/test_codegen.py)
+WARM: tuple[str, ...] = ()
 
 if not missing_modules(REQUIRES):
     from .engine import SymbrimEngine
 
-__all__ = ["EXTRA", "REQUIRES", "SymbrimEngine"]
+__all__ = ["EXTRA", "REQUIRES", "SymbrimEngine", "WARM"]
