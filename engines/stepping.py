@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 
-from .base import EngineUsageError
+from .base import CapabilityError, EngineUsageError
 
-__all__ = ["forward_grid"]
+__all__ = ["forward_grid", "refuse_fork_axis_contact"]
 
 
 def forward_grid(scenario, fall_limit, t_end, who: str) -> tuple[np.ndarray, float]:
@@ -27,3 +27,14 @@ def forward_grid(scenario, fall_limit, t_end, who: str) -> tuple[np.ndarray, flo
         if grid.size < 2:
             raise EngineUsageError(f"t_end = {t_end!r} leaves fewer than 2 grid samples")
     return grid, float(fall_limit)
+
+
+def refuse_fork_axis_contact(engine) -> None:
+    """Raise `CapabilityError` when ``engine`` (an engine whose own runs approximate the
+    rolling-disc contact) is asked to simulate a model with the thesis's fork-axis front
+    contact: a declared limitation, not a failure."""
+    if "simulate" not in engine.capabilities:
+        raise CapabilityError(
+            f"engine {engine.name!r} cannot simulate model {engine.model.name!r}: its forward "
+            f"runs approximate the rolling-disc contact, and this model has the thesis's "
+            f"fork-axis front contact; use a disc-contact model (thesis-disc, benchmark)")

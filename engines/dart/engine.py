@@ -171,10 +171,7 @@ class DartEngine(Engine):
 
     # -- scenarios ---------------------------------------------------------------------
     def simulate(self, scenario, **options):
-        if "simulate" not in self.capabilities:
-            raise CapabilityError(
-                f"engine 'dart' cannot simulate model {self.model.name!r}: its forward runs "
-                f"approximate the rolling-disc contact, and this model has the thesis's fork-axis "
-                f"front contact; use a disc-contact model (thesis-disc, benchmark)")
+        from ..stepping import refuse_fork_axis_contact
+        refuse_fork_axis_contact(self)
         from .run import simulate
         return simulate(self, scenario, **options)

@@ -206,10 +206,7 @@ class DrakeEngine(Engine):
 
     # -- forward runs on Drake's contact --------------------------------------------------
     def simulate(self, scenario, **options):
-        if "simulate" not in self.capabilities:
-            raise CapabilityError(
-                f"engine 'drake' cannot simulate model {self.model.name!r}: its forward runs "
-                f"approximate the rolling-disc contact, and this model has the thesis's fork-axis "
-                f"front contact; use a disc-contact model (thesis-disc, benchmark)")
+        from ..stepping import refuse_fork_axis_contact
+        refuse_fork_axis_contact(self)
         from .run import simulate
         return simulate(self, scenario, **options)

@@ -42,7 +42,7 @@ import numpy as np
 from reference_model import COORDINATES, Model
 from reference_model.export_mjcf import MjcfSettings, massless_links, mjcf_text
 
-from ..base import CapabilityError, Engine, EngineError, EngineUsageError, UnsupportedModel
+from ..base import Engine, EngineError, EngineUsageError, UnsupportedModel
 from ..facts import Costs, RunSetup
 from .contact_study import SOFT_CONTACT
 from .options import tuple_option
@@ -201,10 +201,7 @@ class MujocoEngine(Engine):
         return self._run_models[settings]
 
     def simulate(self, scenario, **options):
-        if "simulate" not in self.capabilities:
-            raise CapabilityError(
-                f"engine 'mujoco' cannot simulate model {self.model.name!r}: its forward runs "
-                f"approximate the rolling-disc contact, and this model has the thesis's fork-axis "
-                f"front contact; use a disc-contact model (thesis-disc, benchmark)")
+        from ..stepping import refuse_fork_axis_contact
+        refuse_fork_axis_contact(self)
         from .run import simulate
         return simulate(self, scenario, **options)
