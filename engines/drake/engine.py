@@ -41,7 +41,7 @@ from ..facts import Costs, RunSetup
 from .contact_study import SOFT_CONTACT
 from .kinematics import Kinematics
 from .options import DEFAULTS, RunSettings, settings_from
-from .plant import terms_plant
+from .plant import refuse_non_physical_inertia, terms_plant
 
 __all__ = ["DrakeEngine"]
 
@@ -90,6 +90,7 @@ class DrakeEngine(Engine):
             stiction_tolerance=stiction_tolerance, friction=friction,
             point_stiffness=point_stiffness, dissipation=dissipation,
             hydroelastic_modulus=hydroelastic_modulus, wheel_half_width=wheel_half_width)
+        refuse_non_physical_inertia(model.params)
         self.plant, self.mapping = terms_plant(model.params)
         self.context = self.plant.CreateDefaultContext()
         self.kin = Kinematics(self.plant, self.context, self.mapping, model.params, model.contact)
