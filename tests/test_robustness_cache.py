@@ -332,6 +332,7 @@ def test_no_working_compiler_runs_on_numpy(no_compiler_cache, cc, model, referen
     _no_litter(no_compiler_cache)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("spelling", ["sh {cc}", "gcc -O2", "  env  gcc  "])
 def test_compiler_command_with_arguments_works(fast_cc, monkeypatch, spelling):
     """CC="ccache gcc" style (issue 14: a traceback): a command with arguments is split like a
@@ -356,6 +357,7 @@ def _one_line(exc: BaseException) -> str:
     return text
 
 
+@pytest.mark.slow
 def test_compiler_failing_midway_is_one_line_naming_cc(tmp_path, fast_cc, monkeypatch):
     broken = tmp_path / "brokencc"     # works on the probe, fails on the generated code
     broken.write_text('#!/bin/sh\ncase "$*" in *bicycle_generated.c*) '
@@ -371,6 +373,7 @@ def test_compiler_failing_midway_is_one_line_naming_cc(tmp_path, fast_cc, monkey
     assert not list((tmp_path / "cache").iterdir()), "nothing may be committed"
 
 
+@pytest.mark.slow
 def test_compiler_writing_no_library_commits_nothing(tmp_path, fast_cc, monkeypatch):
     """Issue 14: CC=/bin/true committed an entry without a library; here a compiler that
     passes the probe and then exits 0 without output."""
