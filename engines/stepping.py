@@ -10,7 +10,7 @@ import numpy as np
 
 from .base import CapabilityError, EngineUsageError
 
-__all__ = ["forward_grid", "refuse_fork_axis_contact"]
+__all__ = ["forward_grid", "refuse_fork_axis_contact", "steps_per_sample"]
 
 
 def forward_grid(scenario, fall_limit, t_end, who: str) -> tuple[np.ndarray, float]:
@@ -38,3 +38,18 @@ def refuse_fork_axis_contact(engine) -> None:
             f"engine {engine.name!r} cannot simulate model {engine.model.name!r}: its forward "
             f"runs approximate the rolling-disc contact, and this model has the thesis's "
             f"fork-axis front contact; use a disc-contact model (thesis-disc, benchmark)")
+
+
+def steps_per_sample(h: float, interval: float, span: float, who: str, option: str) -> int:
+    """Fixed steps of ``h`` per output ``interval``: `EngineUsageError` unless ``h`` divides the
+    interval (the steps must land on the output samples) and the run's ``span``; ``who`` and
+    ``option`` name the engine and its step option in the message."""
+    per = int(round(interval / h))
+    if per < 1 or abs(per * h - interval) > 1e-9 * interval \
+            or abs(round(span / h) * h - span) > 1e-9 * max(span, 1.0):
+        k = max(1, int(interval / h))
+        raise EngineUsageError(
+            f"{who} {option} = {h:g} s must divide the output interval {interval:g} s and the "
+            f"run's duration {span:g} s (the steps must land on the output samples); fix: "
+            f"{option}={interval / k:.10g} or {interval / (k + 1):.10g}")
+    return per

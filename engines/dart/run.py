@@ -35,7 +35,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
-from ..stepping import forward_grid
+from ..stepping import forward_grid, steps_per_sample
 from .options import RunSettings
 from .world import build_world
 
@@ -49,14 +49,6 @@ DIAGNOSTICS = ("slip_speed_rear", "penetration_rear", "slip_speed_front", "penet
                "normal_force_rear", "normal_force_front")
 #: options of the reference's simulate that have no meaning here; accepted and recorded
 REFERENCE_ONLY = ("rtol", "atol", "constraints", "baumgarte")
-
-
-def _steps_per_sample(h: float, interval: float) -> int:
-    per = int(round(interval / h))
-    if per < 1 or abs(per * h - interval) > 1e-9 * interval:
-        raise EngineUsageError(f"DART timestep = {h:g} s must divide the output interval "
-                               f"{interval:g} s; fix: e.g. timestep={interval / max(1, per + 1):.10g}")
-    return per
 
 
 def _settings_of(engine, options: dict) -> RunSettings:
@@ -85,7 +77,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     grid, fall_limit = forward_grid(scenario, fall_limit, t_end, "DART")
     model = engine.model
     h = s.timestep
-    per = _steps_per_sample(h, float(grid[1] - grid[0]))
+    per = steps_per_sample(h, float(grid[1] - grid[0]), float(grid[-1] - grid[0]), "DART",
+                           "timestep")
     n_steps = per * (grid.size - 1)
     torque = torque_input(model, scenario)
     t_steps = grid[0] + h * np.arange(n_steps + 1)

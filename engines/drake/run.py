@@ -42,29 +42,16 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
-from ..stepping import forward_grid
+from ..stepping import forward_grid, steps_per_sample
 from .contact_plant import RunPlant, build_run_plant
 from .plant import BODY_LINKS
 
-__all__ = ["simulate", "steps_per_sample"]
+__all__ = ["simulate"]
 
 THETA = 3                # index of theta in q
 REFERENCE_ONLY = ("rtol", "atol", "constraints", "baumgarte")
 _UP = np.array([0.0, 0.0, 1.0])
 _ZERO = [0.0, 0.0, 0.0]
-
-
-def steps_per_sample(h: float, interval: float, span: float) -> int:
-    """Steps per output interval; EngineUsageError unless ``h`` divides the interval and the
-    run's span."""
-    per = max(1, int(round(interval / h)))
-    if abs(per * h - interval) > 1e-9 * interval or \
-            abs(round(span / h) * h - span) > 1e-9 * max(span, 1.0):
-        raise EngineUsageError(
-            f"Drake time_step = {h:g} s must divide the output interval {interval:g} s and the "
-            f"run's duration {span:g} s; fix: time_step={interval / per:.10g} or "
-            f"{interval / (per + 1):.10g}")
-    return per
 
 
 class _Loads:
@@ -163,7 +150,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     grid, fall_limit = forward_grid(scenario, fall_limit, t_end, "Drake")
     model = engine.model
     h = settings.time_step
-    per = steps_per_sample(h, float(grid[1] - grid[0]), float(grid[-1] - grid[0]))
+    per = steps_per_sample(h, float(grid[1] - grid[0]), float(grid[-1] - grid[0]), "Drake",
+                           "time_step")
 
     rp = build_run_plant(model.params, settings)
     plant, ctx, mp = rp.plant, rp.context, rp.mapping

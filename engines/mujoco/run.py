@@ -47,7 +47,7 @@ from reference_model.scenarios import Scenario, initial_state, torque_input
 from reference_model.solvers import Trajectory
 
 from ..base import EngineUsageError
-from ..stepping import forward_grid
+from ..stepping import forward_grid, steps_per_sample
 from .options import tuple_option
 
 import mujoco
@@ -60,21 +60,6 @@ N_QPOS = 9
 REFERENCE_ONLY = ("rtol", "atol", "constraints", "baumgarte")
 # the warnings after which MuJoCo has reset the state (its data are no longer the run's)
 RESET_WARNINGS = ("mjWARN_BADQACC", "mjWARN_BADQPOS", "mjWARN_BADQVEL")
-
-
-def check_step(h: float, interval: float, span: float) -> int:
-    """Steps per output interval; EngineUsageError unless h divides the interval and the span."""
-    per = int(round(interval / h))
-    if per < 1 or abs(per * h - interval) > 1e-9 * interval:
-        k = max(1, int(interval / h))
-        raise EngineUsageError(
-            f"MuJoCo timestep = {h:g} s must divide the output interval {interval:g} s (the steps "
-            f"must land on the output samples); fix: use {interval:g}/k s, e.g. "
-            f"{interval / k:.10g} or {interval / (k + 1):.10g}")
-    if abs(round(span / h) * h - span) > 1e-9 * max(span, 1.0):
-        raise EngineUsageError(f"MuJoCo timestep = {h:g} s must divide the run's duration "
-                               f"{span:g} s; fix: a step dividing both {interval:g} s and {span:g} s")
-    return per
 
 
 class _Bicycle:
@@ -196,7 +181,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
     grid, fall_limit = forward_grid(scenario, fall_limit, t_end, "MuJoCo")
     model = engine.model
     h = settings.timestep
-    per = check_step(h, float(grid[1] - grid[0]), float(grid[-1] - grid[0]))
+    per = steps_per_sample(h, float(grid[1] - grid[0]), float(grid[-1] - grid[0]), "MuJoCo",
+                           "timestep")
 
     init = initial_state(model, scenario)
     torque = torque_input(model, scenario)
