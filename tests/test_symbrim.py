@@ -3,8 +3,9 @@
 Two independent formulations: the thesis's Newton-Euler projection in its own coordinates
 (generated C, KKT solve) and the Whipple bicycle as SymBRiM assembles it from its published
 parts (WhippleBicycleMoore, KnifeEdgeWheel, NonHolonomicTire, FlatGround), in Moore's
-coordinates, joined by the project's Moore mapping (`reference_model.moore`) and parameter map
-(`engines.kane.moore_parameters`). Agreement to round-off on every disc-contact bicycle
+coordinates, joined by the project's Moore mapping (`reference_model.moore`), its parameters
+from BicycleParameters' own conversion (`engines.symbrim.parameters`; checked against the
+project's map, `engines.kane.moore_parameters`, at the end of this file). Agreement to round-off on every disc-contact bicycle
 (thesis-disc, benchmark, and the conformance suite's general bicycle, whose three distinct
 wheel moments, unequal wheels and off-axis fork CoM break the symmetries a swapped key would
 hide) is evidence for SymBRiM's model, for the maps and for the reference.
@@ -261,3 +262,44 @@ def test_a_crown_lowers_the_weave_speed(pairs):
                              xtol=1e-7))
     assert abs(speeds[0] - 4.2923828604) < 1e-5
     assert speeds[0] - 0.1 > speeds[1] > speeds[2] + 0.1
+
+
+# -- the parameters through BicycleParameters' own conversion ------------------------------
+
+def _measured(name: str):
+    """A measured bicycle BicycleParameters ships, as the project's model parameters."""
+    from reference_model.parameters import parameters_from_benchmark
+    from shipped_sets import breaks_triangle, shipped, table1
+    b = table1(shipped(name))
+    return parameters_from_benchmark(b, name=name, allow_triangle_violation=breaks_triangle(b))
+
+
+@pytest.mark.parametrize("name", ("thesis-disc", "benchmark", "Browser", "Crescendo", "Pista",
+                                  "Yellowrev"))
+def test_bicycleparameters_conversion_is_the_projects_moore_map(name):
+    """Two routes to Moore's parameters: the engine's (the model's Table 1 values through
+    BicycleParameters' Meijaard2007 -> Moore2012 conversion, DynamicistToolKit's
+    benchmark_to_moore) and the project's own map of the thesis's geometry and tensors
+    (`engines.kane.moore_parameters`, which the Kane engine uses). They share no code; both are
+    closed-form trigonometry of the same numbers, so they agree to rounding: 1e-12 of each
+    parameter's size (floored at 1, SI). Measured: 3e-16. A swapped or sign-flipped entry of
+    the name map (ic31 for ICxz) is off by the entry itself."""
+    from engines.kane.engine import moore_parameters as projects
+    from engines.symbrim.parameters import BICYCLEPARAMETERS_ROUTE, moore_parameters, parameter_route
+    params = conformance_model(name).params if "-" in name or name == "benchmark" else _measured(name)
+    assert parameter_route(params) == BICYCLEPARAMETERS_ROUTE
+    ours, theirs = projects(params), moore_parameters(params)
+    err = np.abs(ours - theirs) / np.maximum(1.0, np.abs(ours))
+    k = int(np.argmax(err))
+    assert err[k] < 1e-12, f"{name}: {MOORE_PARAMETERS[k]} {theirs[k]!r} against {ours[k]!r}"
+
+
+def test_a_bicycle_without_a_table1_counterpart_takes_the_projects_map_and_says_so():
+    """The conformance suite's general bicycle: three distinct wheel moments, which Table 1's
+    axisymmetric wheels cannot hold. It gets the project's map (exactly), and the route names
+    why."""
+    from engines.kane.engine import moore_parameters as projects
+    from engines.symbrim.parameters import moore_parameters, parameter_route
+    params = conformance_model("general-disc").params
+    assert "project's own conversion" in parameter_route(params)
+    assert np.array_equal(moore_parameters(params), projects(params))

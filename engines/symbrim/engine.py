@@ -5,10 +5,12 @@ SymBRiM's model (`engines.symbrim.derivation`) is in Moore's coordinates, as the
 own derivation is, and printed to the same five generated functions (`KaneDerivation`:
 unconstrained M and F, the constraint rows, their Jacobian and bias) by the Kane engine's
 printer and cache (`engines.symbrim.codegen`). Everything after that is the Kane engine's:
-the project's Moore <-> thesis mapping (`reference_model.moore`, ``u = T dq``), the parameter
-conversion (`engines.kane.moore_parameters`: the thesis's geometry and inertias as Moore's
-d1..d3, l1..l4 and the products' signs), the per-state elimination of the dependent speeds and
-the reference's solvers for runs. This class only swaps the equations: SymBRiM's instead of
+the project's Moore <-> thesis mapping (`reference_model.moore`, ``u = T dq``), the per-state
+elimination of the dependent speeds and
+the reference's solvers for runs. Its parameters are Moore's from BicycleParameters' own
+conversion of the model's Table 1 values (`engines.symbrim.parameters`; the project's own
+conversion only for a bicycle with no Table 1 counterpart, ``parameter_route`` says which).
+This class only swaps the equations: SymBRiM's instead of
 the project's own Kane derivation, so where the two engines disagree, one of the two
 derivations is wrong.
 
@@ -33,15 +35,17 @@ from reference_model import Model
 
 from ..base import CapabilityError, Engine, EngineSpecError
 from ..facts import Costs, RunSetup
-from ..kane.engine import KaneEngine, moore_parameters
+from ..kane.engine import KaneEngine
 from ..kane.names import MOORE_PARAMETERS
 from . import codegen
+from .parameters import moore_parameters, parameter_route
 
 __all__ = ["SymbrimEngine", "symbrim_parameters"]
 
 
 def symbrim_parameters(params, crown_radius: float = 0.0) -> np.ndarray:
-    """The generated code's parameter vector: Moore's (`moore_parameters`), then the front
+    """The generated code's parameter vector: Moore's (`engines.symbrim.parameters`: through
+    BicycleParameters' own conversion where the model has Table 1 values), then the front
     tyre's crown radius (0: the knife edge, which does not read it). With a crown, Moore's
     rf is the torus's major radius, R_front - crown_radius (the hub's height unchanged)."""
     p = np.r_[moore_parameters(params), float(crown_radius)]
@@ -97,5 +101,6 @@ class SymbrimEngine(KaneEngine):
         Engine.__init__(self, model)
         self.crown_radius = _crown(crown_radius, model.params.R_front)
         self.p = symbrim_parameters(model.params, self.crown_radius)
+        self.parameter_route = parameter_route(model.params)
         self.code = codegen.load(front_crown=self.crown_radius > 0)
         self.params, self.contact = model.params, model.contact
