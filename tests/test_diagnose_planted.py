@@ -43,7 +43,7 @@ from comparisons.judgments.diagnose import (DEFAULT_SEED, LOCALIZED, Block, Mode
                                             check_block, localize)
 from comparisons.judgments.terms import random_states
 from comparisons.judgments.tolerances import load_tolerances
-from planted.engines import CONTROLS, PLANTED, MassMatrixUpper, TwoMistakes
+from planted.engines import CONTROLS, PLANTED, MassMatrixUpper, RearWheelWeight, TwoMistakes
 from reference_model import COORDINATES, TORQUE_NAMES, load_model
 
 TOLS = load_tolerances()   # the packaged tolerances.toml, read once
@@ -62,7 +62,8 @@ def diagnosed():
     states = random_states(N_STATES, seed=DEFAULT_SEED)
     models = {n: load_model(n) for n in ("thesis", "benchmark")}
     shared = {n: ModelCauses(m, states) for n, m in models.items()}
-    todo = {cls: spec[0] for cls, spec in PLANTED.items()} | CONTROLS | {TwoMistakes: "thesis"}
+    todo = ({cls: spec[0] for cls, spec in PLANTED.items()} | CONTROLS
+            | {TwoMistakes: "thesis", RearWheelWeight: "thesis"})
     return {cls: localize(models[m], states, [cls(models[m])], shared=shared[m],
                            tolerances=TOLS)
             for cls, m in todo.items()}
@@ -109,6 +110,28 @@ def test_two_mistakes_are_no_single_cause(diagnosed):
     own = dict((t, lab) for t, lab, _ in e.per_term)
     assert own["Qaero"] == "sign of Qaero flipped"
     assert own["Qgrav in F"].startswith("sign of Qgrav flipped")
+
+
+def test_two_causes_the_terms_cannot_tell_apart_are_both_named(diagnosed):
+    """The rear wheel's weight taken 1.5 times in Qgrav alone is, in the terms, the same vector
+    as a rear radius wrong in Qgrav alone (`RearWheelWeight`'s docstring: both scale
+    d cos(theta)/dq). Each fit explains all of it; whichever diagnose names first, it must name
+    the other as explaining it as well, not as a lesser runner-up. The fit of the one named
+    follows from the potential V = g (m2 R_rear + ...) cos(theta) + g M R_rear cos(theta) + ...:
+    dm2 = 0.5 m2, or dR_rear = dm2 R_rear / M with M the mass of the four bodies that R_rear
+    lifts (1e-9 relative: Qgrav is linear in both, the fit exact to rounding)."""
+    loc = diagnosed[RearWheelWeight]
+    e = loc.explanation
+    assert loc.localized and e.explained > 1 - 1e-9
+    named = {e.labels[0], *e.equally_good}
+    assert named == {"m2 in Qgrav only", "R_rear in Qgrav only"}, named
+    p = load_model("thesis").params
+    dm2 = 0.5 * p.m2
+    expected = dm2 if e.causes[0].startswith("m2") else \
+        dm2 * p.R_rear / (p.m2 + p.m3 + p.m4 + p.m5)
+    assert abs(e.estimates[0] - expected) <= 1e-9 * abs(expected), (e.causes, e.estimates)
+    assert "cannot tell the two apart" in e.describe()
+    assert "next best single cause" not in e.describe()
 
 
 def test_term_table_shows_the_lower_triangle(diagnosed):

@@ -337,11 +337,29 @@ class Explanation:
                      "exact one")
         if len(self.causes) == 2 and _looks_swapped(self):
             text += f"; looks like {self.causes[0]} and {self.causes[1]} swapped"
+        alike = self.equally_good
+        if alike:
+            text += (f"; {' and '.join(alike)} {'explains' if len(alike) == 1 else 'explain'} "
+                     f"it as well: the compared terms cannot tell "
+                     f"{'the two' if len(alike) == 1 else 'these'} apart, so check "
+                     f"{'both' if len(alike) == 1 else 'each'}")
+            return text
         if self.runner_up and self.runner_up[1] >= 0.005:   # a runner-up of nothing says nothing
             label = next((c[1] for c in self.candidates if c[0] == self.runner_up[0]),
                          cause_label(self.runner_up[0]))
             text += f"; next best single cause {label} ({100 * self.runner_up[1]:.1f}%)"
         return text
+
+    @property
+    def equally_good(self) -> tuple[str, ...]:
+        """Labels of the other single causes that explain the difference as well as the one
+        named (within `_TIE` of its share): e.g. the rear wheel's mass and the rear radius in
+        Qgrav alone, whose effects are the same vector (both scale the hub's height term
+        g R_rear cos(theta)). Empty for a pair, and when the named cause stands alone."""
+        if len(self.causes) != 1:
+            return ()
+        return tuple(label for cid, label, share, _ in self.candidates
+                     if cid != self.causes[0] and share >= self.explained - _TIE)
 
     @property
     def body_text(self) -> str:

@@ -462,6 +462,24 @@ class TwoMistakes(GravitySignInForces, DragSign):
     name = "planted-two-mistakes"
 
 
+class RearWheelWeight(PortedBicycle):
+    """The rear wheel's weight taken 1.5 times (its tyre and tube counted twice) in the gravity
+    alone. In Qgrav the rear wheel's mass and the rear radius act alike: the hub's height is
+    R_rear cos(theta), and R_rear lifts every body by the same cos(theta), so both changes are
+    one vector, ``-g (dm2 R_rear + M dR_rear) d cos(theta)/dq``; no comparison of the terms can
+    tell them apart, and diagnose must say so instead of naming one."""
+
+    name = "planted-rear-wheel-weight"
+
+    def _Qgrav(self, s):
+        saved = self.mass
+        self.mass = {**saved, 2: 1.5 * saved[2]}
+        try:
+            return super()._Qgrav(s)
+        finally:
+            self.mass = saved
+
+
 class CannotRepresent(PortedBicycle):
     """A port that declares it cannot represent the model (as MuJoCo for an inertia that breaks
     A + B >= C): diagnose leaves it out with the reason, as a run does."""
