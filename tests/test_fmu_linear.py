@@ -12,7 +12,8 @@ imaginary part given the wrong sign (the Jacobian test 60 off; the eigenvalues u
 upright every such sine is of a zero angle and beta's tangent is zero by symmetry, which is why
 the Jacobian is checked at a random state); in linear.tangents, gamma's dependent rates taken
 from D's theta column (both routes' eigenvalues 2.6e-2 off); FD_STEP at 1e-2 (the central
-differences' eigenvalues 2.7e-5 off, over their 1e-9)."""
+differences' eigenvalues 2.7e-5 off, over their 1e-9); pow left out of complex_source's
+renaming (the complex-copy test)."""
 
 import ctypes
 
@@ -234,3 +235,18 @@ def test_a_rebuilt_fmu_with_a_heavier_fork_moves_the_weave_speed(benchmark, tmp_
     assert abs(weave - linearize.weave_speed(heavy)) <= 1e-9
     assert weave - linearize.weave_speed(benchmark) > 0.04
     assert np.max(_relative_error(engine.eigenvalues(SPEEDS), linearize.eigenvalues(heavy, SPEEDS))) <= 1e-12
+
+
+def test_the_complex_copy_renames_every_kernel_and_refuses_an_unknown_function():
+    """complex_source on a two-line kernel: double -> cplx, bx_ -> bxc_, the elementary
+    functions to the wrapper's first-order ones, the runtime's include dropped; a function it
+    has no complex version of (atan2) is a one-line FmuExportError naming it and the fix."""
+    from reference_model.exports.fmu import FmuExportError, complex_source
+    text = ('static void bx_k(const double *q, double *out)\n'
+            '{ const double a = sin(q[0]); out[0] = pow(a, 2.0) + sqrt(cos(a)); }\n'
+            '#include "runtime.c"\n')
+    got = complex_source(text)
+    assert got == ('static void bxc_k(const cplx *q, cplx *out)\n'
+                   '{ const cplx a = c_sin(q[0]); out[0] = c_pow(a, 2.0) + c_sqrt(c_cos(a)); }\n\n')
+    with pytest.raises(FmuExportError, match="atan2.*fix: export with directional_derivatives=False"):
+        complex_source("static void bx_k(const double *q, double *out) { out[0] = atan2(q[0], q[1]); }")

@@ -289,10 +289,19 @@ class FmuEngine(Engine):
         if self.directional:
             states, ders = self._state_refs()
             self._set(inst, q, dq, np.zeros(3))
-            return np.array(inst.fmu.getDirectionalDerivative(ders, states, list(ds / self._scale))) * self._scale
+            return self._directional(inst, ders, states, ds / self._scale) * self._scale
         step = FD_STEP / max(float(np.max(np.abs(ds))), 1e-300)
         up, down = np.concatenate([q, dq]) + step * ds, np.concatenate([q, dq]) - step * ds
         return (self._rates(up) - self._rates(down)) / (2 * step)
+
+    @staticmethod
+    def _directional(inst: _Instance, unknowns, knowns, seed) -> np.ndarray:
+        try:
+            return np.array(inst.fmu.getDirectionalDerivative(unknowns, knowns, list(seed)))
+        except Exception as exc:     # fmpy raises on an fmi2Error/fmi2Discard status
+            raise ArithmeticError("the FMU's fmi2GetDirectionalDerivative failed near upright "
+                                  f"({str(exc).splitlines()[0][:120]}), though it declares "
+                                  "providesDirectionalDerivative") from None
 
     def _rates(self, s) -> np.ndarray:
         ddq, status = self._one(s[:8], s[8:], np.zeros(3), None)
@@ -314,9 +323,8 @@ class FmuEngine(Engine):
             self._set(inst, q, np.zeros(8), np.zeros(3))
             states, _ = self._state_refs()
             names = [n for row in self.mapping.terms["D"] for n in row]
-            out = inst.fmu.getDirectionalDerivative([self._vr[n] for n in names], states[:8],
-                                                    list(dq_dir / self._scale[:8]))
-            return np.array(out).reshape(5, 8)
+            return self._directional(inst, [self._vr[n] for n in names], states[:8],
+                                     dq_dir / self._scale[:8]).reshape(5, 8)
         h = FD_STEP / max(float(np.max(np.abs(dq_dir))), 1e-300)
         return (self._jacobian(q + h * dq_dir) - self._jacobian(q - h * dq_dir)) / (2 * h)
 
@@ -329,7 +337,7 @@ class FmuEngine(Engine):
         return roll_steer_eigenvalues(
             self._jvp, lambda q, dq: self._rates(np.concatenate([q, dq]))[8:],
             lambda q, dq: np.asarray(self.constraint_residual(q, dq)), self._jacobian, self._along,
-            speeds, self.model.params.R_rear)
+            speeds, self.model.params.R_rear, self.model.params.g)
 
     def simulate(self, scenario: Scenario, **options):
         if self.interface == "cs":

@@ -96,10 +96,11 @@ def state_matrix(jvp: Jvp, jacobian: Jacobian, along: Along, q0: np.ndarray,
 
 def roll_steer_eigenvalues(jvp: Jvp, derivatives: Callable[[np.ndarray, np.ndarray], np.ndarray],
                            residual: Residual, jacobian: Jacobian, along: Along, speeds,
-                           R_rear: float) -> np.ndarray:
+                           R_rear: float, g: float) -> np.ndarray:
     """(n, 4) complex: the roll/steer eigenvalues (1/s) at each forward speed (m/s), sorted as
     `sort_eigenvalues`. ``derivatives(q, dq)`` is f's ddq, checked to vanish at each steady
-    motion (drag or a force that keeps it from being one raises `LinearizationError`)."""
+    motion to 1e-8 of the accelerations' scale g + (v / R_rear)^2 R_rear (drag, or any force
+    that keeps it from being one, raises `LinearizationError`)."""
     v = np.atleast_1d(np.asarray(speeds, dtype=float))
     if v.ndim != 1 or not np.all(np.isfinite(v)):
         raise ValueError(f"speeds must be a finite speed or a 1-D array of them (m/s); got {speeds!r}")
@@ -107,7 +108,7 @@ def roll_steer_eigenvalues(jvp: Jvp, derivatives: Callable[[np.ndarray, np.ndarr
     for i, vi in enumerate(v):
         q0, dq0 = upright_state(residual, jacobian, float(vi), R_rear)
         ddq = derivatives(q0, dq0)
-        scale = 9.81 + float(np.max(np.abs(dq0))) ** 2
+        scale = g + vi * vi / R_rear
         if np.max(np.abs(ddq)) > 1e-8 * scale:
             raise LinearizationError(
                 f"upright straight running at {vi:g} m/s is not a steady motion of this engine "
