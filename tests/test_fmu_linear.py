@@ -13,7 +13,8 @@ upright every such sine is of a zero angle and beta's tangent is zero by symmetr
 the Jacobian is checked at a random state); in linear.tangents, gamma's dependent rates taken
 from D's theta column (both routes' eigenvalues 2.6e-2 off); FD_STEP at 1e-2 (the central
 differences' eigenvalues 2.7e-5 off, over their 1e-9); pow left out of complex_source's
-renaming (the complex-copy test)."""
+renaming (the complex-copy test); the central differences of D divided by h, not 2h (both
+tests that take them, 0.24 off)."""
 
 import ctypes
 
@@ -180,6 +181,24 @@ def test_an_fmu_without_directional_derivatives_takes_central_differences(benchm
     with pytest.raises(FMICallException):
         fmu.getDirectionalDerivative([24], [0], [1.0])
 
+
+
+def test_an_fmu_mapped_without_terms_takes_the_constraints_from_the_reference(benchmark, tmp_path):
+    """The mapping of someone else's FMU: states, torques, Baumgarte and parameters only (no
+    [terms], no [residual]). The contact height and D are then the thesis's constraints at the
+    FMU's states and dD . dq central differences of D (step 1e-6: ~1e-10 of an entry); measured
+    3.3e-14 of the largest eigenvalue with the FMU's directional derivatives, bounded by 1e-9."""
+    from engines import load_engine
+    from reference_model.exports.fmu import mapping_text
+    text = mapping_text(benchmark)
+    cut = text[:text.index("# optional: outputs holding the thesis's terms")] + \
+        text[text.index("# optional: the FMU parameters"):]
+    (tmp_path / "map.toml").write_text(cut, encoding="utf-8")
+    engine = load_engine(SPEC, benchmark, fmu=str(cached_fmu(benchmark)),
+                         mapping=str(tmp_path / "map.toml"))
+    assert engine.directional and not engine.mapping.terms and engine.mapping.residual is None
+    got = engine.eigenvalues(SPEEDS)
+    assert np.max(_relative_error(got, linearize.eigenvalues(benchmark, SPEEDS))) <= 1e-9
 
 def test_the_reduction_needs_the_rates_dependence_on_the_configuration(benchmark, benchmark_engine):
     """Leaving out the dependent rates' change with roll and steer (dD . dq along the tangent:
