@@ -4,7 +4,6 @@ code cache, as the generated code is, so a warm make test pays ~0.3 s for this f
 validation, one instance, 12 states); the conformance suite on the FMU and the planted
 parameter through diagnose are slow (subprocess / a second build)."""
 
-import hashlib
 import os
 import subprocess
 import sys
@@ -17,8 +16,8 @@ import pytest
 fmpy = pytest.importorskip("fmpy")
 
 from engines.base import EngineSpecError   # noqa: E402
+from fmu_builds import cached_fmu   # noqa: E402
 from reference_model import load_model   # noqa: E402
-from reference_model.equations import codegen   # noqa: E402
 from reference_model.exports import fmu as fmu_export   # noqa: E402
 from reference_model.parameters.schema import PARAMETER_NAMES, PARAMETER_UNITS   # noqa: E402
 from reference_model.solvers import consistent_state   # noqa: E402
@@ -29,20 +28,6 @@ ROOT = Path(__file__).resolve().parents[1]
 SPEC = "engines.fmu:FmuEngine"
 
 
-def _cached_fmu(model, co_simulation: bool = False) -> Path:
-    """The FMU of ``model``, built once per version of its sources (written atomically, so
-    two pytest-xdist workers building it at once both end with an intact file)."""
-    h = hashlib.sha256(b"cs" if co_simulation else b"me")
-    for path in (fmu_export.WRAPPER, Path(fmu_export.__file__)):
-        h.update(path.read_bytes())
-    h.update(model.library.key.encode() + model.params.vector().tobytes())
-    out = codegen.cache_root() / "fmu-tests" / f"{model.name}-{h.hexdigest()[:16]}.fmu"
-    if not out.is_file():
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fmu_export.write_fmu(model, out, co_simulation=co_simulation)
-    return out
-
-
 @pytest.fixture(scope="module")
 def thesis():
     return load_model("thesis")
@@ -50,7 +35,7 @@ def thesis():
 
 @pytest.fixture(scope="module")
 def thesis_fmu(thesis):
-    return _cached_fmu(thesis)
+    return cached_fmu(thesis)
 
 
 @pytest.fixture(scope="module")
@@ -186,7 +171,7 @@ def test_a_co_simulation_fmu_gives_runs_only(thesis):
     from engines.reference import ReferenceEngine
     from fmpy.validation import validate_fmu
     from reference_model.scenarios import get_scenario
-    path = _cached_fmu(thesis, co_simulation=True)
+    path = cached_fmu(thesis, co_simulation=True)
     assert validate_fmu(str(path)) == []
     engine = load_engine(SPEC, thesis, fmu=str(path), interface="cs")
     assert engine.capabilities == frozenset({"simulate"})

@@ -5,7 +5,13 @@ be fixed parameters): (0, 0) for the exact accelerations, a scenario's for its r
 without mapped Baumgarte parameters is used with its own constraint handling. Runs are the
 reference's `run_forward` (its initial state, its DOP853 loop) with the right-hand side from
 the FMU; a run's C is the FMU's residual outputs when mapped, else the thesis's constraints at
-the FMU's states."""
+the FMU's states.
+
+``eigenvalues(speeds)``: the roll/steer eigenvalues about upright straight running (linear.py's
+reduction) from Jacobian-vector products of the FMU's derivatives: its own
+``fmi2GetDirectionalDerivative`` when it declares ``providesDirectionalDerivative``, central
+differences of ``fmi2GetDerivatives`` (step `FD_STEP`) otherwise; only for an FMU whose
+continuous states are exactly the mapped q and dq."""
 
 from __future__ import annotations
 
@@ -21,15 +27,21 @@ from reference_model.model import ForwardResult
 from reference_model.parameters.schema import PARAMETER_NAMES
 from reference_model.scenarios import Scenario, run_forward
 
-from ..base import Engine, EngineSpecError, UnsupportedModel
+from ..base import CAPABILITIES, Engine, EngineSpecError, UnsupportedModel
 from ..facts import Costs, RunSetup
 from .cosimulation import co_simulate
+from .linear import roll_steer_eigenvalues
 from .mapping import MappingError, parse_mapping
 
-__all__ = ["FmuEngine", "MAPPING_IN_FMU"]
+__all__ = ["FD_STEP", "FmuEngine", "MAPPING_IN_FMU"]
 
 #: where an FMU exported by bicycle-xval carries its own mapping
 MAPPING_IN_FMU = "resources/bicycle-xval-mapping.toml"
+#: the central-difference step (SI, along a direction of largest entry 1) of the linearization
+#: of an FMU without directional derivatives: truncation ~h^2 |f'''| and round-off
+#: ~1e-16 |f| / h balance near 1e-6 (measured: 2.7e-13 of the largest benchmark eigenvalue,
+#: tests/test_fmu_linear.py)
+FD_STEP = 1e-6
 _TERM_CAPABILITY = {"M": "mass_matrix", "Qgrav": "gravity", "D": "constraint_jacobian",
                     "dDdq": "constraint_bias"}
 
@@ -150,6 +162,12 @@ class FmuEngine(Engine):
         caps |= {c for t, c in _TERM_CAPABILITY.items() if t in self.mapping.terms}
         if {"F", "S"} <= set(self.mapping.terms):
             caps.add("generalized_forces")
+        # the linearization needs the whole state: the FMU's continuous states exactly q, dq
+        self._linear = self.interface == "me" and len(self._description.derivatives) == 16
+        me = self._description.modelExchange
+        self.directional = bool(self._linear and me.providesDirectionalDerivative)
+        if self._linear and "eigenvalues" in CAPABILITIES:   # (declared once the harness knows it)
+            caps.add("eigenvalues")
         # a Co-Simulation FMU only steps: runs, nothing at a single state
         self.capabilities = frozenset(caps) if self.interface == "me" else frozenset({"simulate"})
 
@@ -257,6 +275,70 @@ class FmuEngine(Engine):
         if self.mapping.residual is None:
             return self.model.constraint_residual(q, dq)
         return self._outputs(tuple((n,) for n in self.mapping.residual), q, dq)
+
+    # -- the linearization (linear.py) ------------------------------------------------------
+
+    def _state_refs(self) -> tuple[list[int], list[int]]:
+        """Value references of the mapped states and of their derivatives, thesis order."""
+        ders = [self._description.derivatives[i] for i in self._index]
+        return ([d.variable.derivative.valueReference for d in ders],
+                [d.variable.valueReference for d in ders])
+
+    def _jvp(self, q, dq, ds) -> np.ndarray:
+        """J_f ds (thesis units) at (q, dq), f = (dq, ddq) at a1 = a2 = 0 (exact accelerations)."""
+        inst = self._instance(None)
+        if self.directional:
+            states, ders = self._state_refs()
+            self._set(inst, q, dq, np.zeros(3))
+            return self._directional(inst, ders, states, ds / self._scale) * self._scale
+        step = FD_STEP / max(float(np.max(np.abs(ds))), 1e-300)
+        up, down = np.concatenate([q, dq]) + step * ds, np.concatenate([q, dq]) - step * ds
+        return (self._rates(up) - self._rates(down)) / (2 * step)
+
+    @staticmethod
+    def _directional(inst: _Instance, unknowns, knowns, seed) -> np.ndarray:
+        try:
+            return np.array(inst.fmu.getDirectionalDerivative(unknowns, knowns, list(seed)))
+        except Exception as exc:     # fmpy raises on an fmi2Error/fmi2Discard status
+            raise ArithmeticError("the FMU's fmi2GetDirectionalDerivative failed near upright "
+                                  f"({str(exc).splitlines()[0][:120]}), though it declares "
+                                  "providesDirectionalDerivative") from None
+
+    def _rates(self, s) -> np.ndarray:
+        ddq, status = self._one(s[:8], s[8:], np.zeros(3), None)
+        if status:
+            raise ArithmeticError("the FMU's derivatives failed (fmi2GetDerivatives) near upright")
+        return np.concatenate([s[8:], ddq])
+
+    def _jacobian(self, q) -> np.ndarray:
+        """D (5x8): the FMU's output when mapped, else the thesis's constraints at its states."""
+        if "D" in self.mapping.terms:
+            return self._outputs(self.mapping.terms["D"], q, np.zeros(8))
+        return self.model.constraint_jacobian(q)
+
+    def _along(self, q, dq_dir) -> np.ndarray:
+        """dD . dq_dir (5x8): directional derivatives of the FMU's D outputs when it has both,
+        else central differences of D (step FD_STEP)."""
+        if self.directional and "D" in self.mapping.terms:
+            inst = self._instance(None)
+            self._set(inst, q, np.zeros(8), np.zeros(3))
+            states, _ = self._state_refs()
+            names = [n for row in self.mapping.terms["D"] for n in row]
+            return self._directional(inst, [self._vr[n] for n in names], states[:8],
+                                     dq_dir / self._scale[:8]).reshape(5, 8)
+        h = FD_STEP / max(float(np.max(np.abs(dq_dir))), 1e-300)
+        return (self._jacobian(q + h * dq_dir) - self._jacobian(q - h * dq_dir)) / (2 * h)
+
+    def eigenvalues(self, speeds) -> np.ndarray:
+        """(n, 4) complex: the roll/steer eigenvalues (1/s) about upright straight running at
+        each forward speed (m/s), sorted as `reference_model.linearize.sort_eigenvalues`;
+        by the FMU's directional derivatives, or central differences (`directional`)."""
+        if not self._linear:
+            self._missing("eigenvalues")
+        return roll_steer_eigenvalues(
+            self._jvp, lambda q, dq: self._rates(np.concatenate([q, dq]))[8:],
+            lambda q, dq: np.asarray(self.constraint_residual(q, dq)), self._jacobian, self._along,
+            speeds, self.model.params.R_rear, self.model.params.g)
 
     def simulate(self, scenario: Scenario, **options):
         if self.interface == "cs":

@@ -11,6 +11,11 @@ States q and dq (thesis coordinates, SI); the constraints by Baumgarte stabilisa
 outputs the constraint residual ``C.*`` and the contact multipliers ``lambda.*``, and the
 thesis's terms ``term.*`` (M, F = Qv + Qgrav + Qaero, S, Qgrav, D, dD dq), which the ``fmu``
 engine reads when the mapping names them. The thirty parameters by their names and SI units.
+Directional derivatives (``providesDirectionalDerivative="true"``, unless
+``directional_derivatives=False``): ``fmi2GetDirectionalDerivative`` of any Real (derivatives,
+outputs, terms) along any states, inputs and parameters, by a complex step through a complex
+copy of the generated C (:func:`complex_source`): exact to rounding, no step-size error
+(docs/engines.md, "The reference as an FMU").
 ``resources/bicycle-xval-mapping.toml`` maps the variables to the thesis's names
 (:func:`mapping_text`; docs/engines.md, "The fmu engine"). The FMU file is written to a
 temporary file beside ``out`` and renamed: never half-written.
@@ -31,6 +36,8 @@ import zipfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
+import re
+
 import numpy as np
 
 from ..equations import codegen
@@ -41,8 +48,8 @@ from ..parameters.schema import PARAMETER_DESCRIPTIONS, PARAMETER_NAMES, PARAMET
 from ..solvers import THESIS_BAUMGARTE, consistent_state
 from .text import float_text
 
-__all__ = ["FmuExportError", "MAPPING_FILE", "MODEL_IDENTIFIER", "TERM_BLOCKS", "CS_STEP", "fmi_headers",
-           "mapping_text", "model_description", "write_fmu"]
+__all__ = ["FmuExportError", "MAPPING_FILE", "MODEL_IDENTIFIER", "TERM_BLOCKS", "CS_STEP",
+           "complex_source", "fmi_headers", "mapping_text", "model_description", "write_fmu"]
 
 MODEL_IDENTIFIER = "bicycle_xval"
 MAPPING_FILE = "resources/bicycle-xval-mapping.toml"
@@ -74,6 +81,23 @@ def fmi_headers() -> Path:
         raise FmuExportError("export --format fmu needs the FMI headers that fmpy ships; fix: "
                              "pip install 'bicycle-xval[fmu]'")
     return folder
+
+
+def complex_source(generated: str) -> str:
+    """The generated C (``bicycle_generated.c``) as complex-step code for the wrapper's
+    directional derivatives: every ``double`` a ``cplx`` (double _Complex), the kernels
+    ``bx_*`` renamed ``bxc_*``, sin/cos/sqrt/pow the wrapper's first-order complex versions,
+    without the runtime (the wrapper solves the complex KKT system itself)."""
+    text = generated.replace('#include "runtime.c"', "")
+    unknown = sorted(set(re.findall(r"\b([a-z_][a-z0-9_]*)\(", text))
+                     - {"sin", "cos", "sqrt", "pow", "for"} - set(re.findall(r"\b(bx_\w+)\(", text)))
+    if unknown:
+        raise FmuExportError(f"the generated C calls {', '.join(unknown)}, which the FMU's "
+                             "complex-step derivatives do not cover; fix: export with "
+                             "directional_derivatives=False, or add them to fmu_wrapper.c")
+    text = re.sub(r"\bdouble\b", "cplx", text)
+    text = re.sub(r"\bbx_", "bxc_", text)
+    return re.sub(r"\b(sin|cos|sqrt|pow)\(", r"c_\1(", text)
 
 
 def _coordinate_unit(name: str, order: int) -> str:
@@ -138,9 +162,11 @@ def _variables(model: Model, baumgarte: tuple[float, float]) -> list[tuple[str, 
 
 
 def model_description(model: Model, guid: str, baumgarte=THESIS_BAUMGARTE,
-                      co_simulation: bool = False) -> str:
+                      co_simulation: bool = False, directional_derivatives: bool = True) -> str:
     """modelDescription.xml of the FMU of ``model`` (``guid`` written into it); with
-    ``co_simulation`` also the Co-Simulation interface (fixed-step RK4, :data:`CS_STEP`)."""
+    ``co_simulation`` also the Co-Simulation interface (fixed-step RK4, :data:`CS_STEP`);
+    ``directional_derivatives``: whether it declares ``fmi2GetDirectionalDerivative``."""
+    provides = "true" if directional_derivatives else "false"
     a1, a2 = baumgarte
     variables = _variables(model, (a1, a2))
     units = sorted({a["unit"] for _, a in variables if a.get("unit")})
@@ -152,13 +178,13 @@ def model_description(model: Model, guid: str, baumgarte=THESIS_BAUMGARTE,
              'variableNamingConvention="flat" numberOfEventIndicators="0">',
              f'  <ModelExchange modelIdentifier="{MODEL_IDENTIFIER}" '
              'canGetAndSetFMUstate="false" canSerializeFMUstate="false" '
-             'providesDirectionalDerivative="false" completedIntegratorStepNotNeeded="true">',
+             f'providesDirectionalDerivative="{provides}" completedIntegratorStepNotNeeded="true">',
              '    <SourceFiles>', '      <File name="fmu_wrapper.c"/>', '    </SourceFiles>',
              '  </ModelExchange>']
     if co_simulation:
         lines += [f'  <CoSimulation modelIdentifier="{MODEL_IDENTIFIER}" '
                   'canHandleVariableCommunicationStepSize="true" canGetAndSetFMUstate="false" '
-                  'canSerializeFMUstate="false" providesDirectionalDerivative="false">',
+                  f'canSerializeFMUstate="false" providesDirectionalDerivative="{provides}">',
                   '    <SourceFiles>', '      <File name="fmu_wrapper.c"/>', '    </SourceFiles>',
                   '  </CoSimulation>']
     lines += ['  <UnitDefinitions>']
@@ -186,11 +212,26 @@ def model_description(model: Model, guid: str, baumgarte=THESIS_BAUMGARTE,
     lines += ['  <ModelStructure>', '    <Outputs>']
     lines += [f'      <Unknown index="{i}"/>' for i in outputs]
     lines += ['    </Outputs>', '    <Derivatives>']
-    lines += [f'      <Unknown index="{i}"/>' for i in derivs]
+    lines += [f'      <Unknown index="{i}"{_dependencies(variables, vr)}/>'
+              for i, vr in ((i, i - 1) for i in derivs)]
     lines += ['    </Derivatives>', '    <InitialUnknowns>']
     lines += [f'      <Unknown index="{i}"/>' for i in sorted(outputs + derivs)]
     lines += ['    </InitialUnknowns>', '  </ModelStructure>', '</fmiModelDescription>', '']
     return "\n".join(lines)
+
+
+def _dependencies(variables: list[tuple[str, dict]], vr: int) -> str:
+    """The Derivatives entry's knowns (FMI 2.0 indices, 1-based): der(q_i) = dq_i, a constant
+    factor 1; der(dq_i) depends on every state and input ("dependent": nonlinear)."""
+    name = variables[vr][0]
+    index = {n: i + 1 for i, (n, _) in enumerate(variables)}
+    states = [index[c] for c in COORDINATES] + [index[f"d_{c}"] for c in COORDINATES]
+    inputs = [i + 1 for i, (_, a) in enumerate(variables) if a["causality"] == "input"]
+    if name.startswith("der(d_"):
+        knowns = states + inputs
+        return (f' dependencies="{" ".join(map(str, knowns))}" '
+                f'dependenciesKind="{" ".join(["dependent"] * len(knowns))}"')
+    return f' dependencies="{index["d_" + name[4:-1]]}" dependenciesKind="constant"'
 
 
 def _description(model: Model, baumgarte) -> str:
@@ -262,9 +303,11 @@ def _compile(build: Path, headers: Path, cc: tuple[str, ...]) -> Path:
 
 
 def write_fmu(model: Model, out: str | os.PathLike[str], baumgarte=THESIS_BAUMGARTE, *,
-              co_simulation: bool = False) -> Path:
+              co_simulation: bool = False, directional_derivatives: bool = True) -> Path:
     """Build the FMU of ``model`` and write it to ``out`` atomically; returns the path.
-    ``co_simulation``: also the Co-Simulation interface (fixed-step RK4 inside fmi2DoStep).
+    ``co_simulation``: also the Co-Simulation interface (fixed-step RK4 inside fmi2DoStep);
+    ``directional_derivatives``: fmi2GetDirectionalDerivative by complex steps (False: an
+    FMU without them, as many tools export; its function returns fmi2Error).
     Raises `FmuExportError` (no compiler, no headers) and `codegen.CodegenError`."""
     out = Path(out)
     headers = fmi_headers()
@@ -274,7 +317,7 @@ def write_fmu(model: Model, out: str | os.PathLike[str], baumgarte=THESIS_BAUMGA
     generated = (library.path / codegen.C_FILES[0]).read_text(encoding="utf-8")
     key = hashlib.sha256(generated.encode() + model.params.vector().tobytes()
                          + np.asarray(baumgarte, dtype=float).tobytes()
-                         + bytes([co_simulation])).hexdigest()
+                         + bytes([co_simulation, directional_derivatives])).hexdigest()
     guid = f"{{{key[:8]}-{key[8:12]}-{key[12:16]}-{key[16:20]}-{key[20:32]}}}"
     x0 = _start_state(model)
     wrapper = (WRAPPER.read_text(encoding="utf-8")
@@ -283,19 +326,22 @@ def write_fmu(model: Model, out: str | os.PathLike[str], baumgarte=THESIS_BAUMGA
                .replace("@X_START@", ", ".join(repr(float(v)) for v in x0))
                .replace("@A1@", repr(float(baumgarte[0]))).replace("@A2@", repr(float(baumgarte[1])))
                .replace("@COSIMULATION@", "1" if co_simulation else "0")
+               .replace("@DIRECTIONAL@", "1" if directional_derivatives else "0")
                .replace("@CS_STEP@", repr(CS_STEP))
                .replace("@LAYOUT@", "filled in by reference_model/exports/fmu.py"))
     with tempfile.TemporaryDirectory(prefix="bicycle-xval-fmu-") as tmp:
         build = Path(tmp)
         sources = {"fmu_wrapper.c": wrapper, "bicycle_generated.c": generated,
                    "runtime.c": codegen.RUNTIME_C.read_text(encoding="utf-8")}
+        if directional_derivatives:
+            sources["bicycle_complex.c"] = complex_source(generated)
         for name, text in sources.items():
             (build / name).write_text(text, encoding="utf-8")
         so = _compile(build, headers, cc)
         data = io.BytesIO()
         with zipfile.ZipFile(data, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("modelDescription.xml", model_description(model, guid, baumgarte,
-                                                                co_simulation))
+            z.writestr("modelDescription.xml", model_description(
+                model, guid, baumgarte, co_simulation, directional_derivatives))
             z.write(so, binary)
             for name, text in sources.items():
                 z.writestr(f"sources/{name}", text)

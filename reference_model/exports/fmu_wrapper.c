@@ -7,12 +7,45 @@
  *   q (8) | dq (8) | der(q) (8) | der(dq) (8) | T (3) | C (5) | lambda (5) | p (30) | a1, a2
  *   | the terms: M (64) | F = Qv + Qgrav + Qaero (8) | S (24) | Qgrav (8) | D (40) | dD dq (5)
  * der(dq) and lambda are bx_forward's (runtime.c): [M D'; D 0][ddq; lambda] =
- * [F + S T; -dD dq - 2 a1 D dq - a2^2 C], Baumgarte with the a1, a2 parameters. */
+ * [F + S T; -dD dq - 2 a1 D dq - a2^2 C], Baumgarte with the a1, a2 parameters.
+ *
+ * Directional derivatives (when DIRECTIONAL): bicycle_complex.c is the generated C with every
+ * double a double _Complex (bx_ renamed bxc_, fmu.py writes it), the elementary functions
+ * below carry the imaginary part at first order (sin(x + i y) = sin x + i y cos x, ...), so a
+ * seed x + i h dx through the same expressions and the KKT solve gives Im f / h = J dx
+ * exactly to rounding: complex-step differentiation, h = DD_STEP / max|dx| (no subtraction,
+ * no truncation error: the neglected terms are h^2 relative, 1e-40). */
 #include <stdlib.h>
 #include <string.h>
 #include <stdio.h>
 #include "fmi2Functions.h"
 #include "bicycle_generated.c"
+#define DIRECTIONAL @DIRECTIONAL@   /* 1: fmi2GetDirectionalDerivative by complex steps */
+#if DIRECTIONAL
+#include <complex.h>
+typedef double _Complex cplx;
+#define MK(re, im) ((re) + (im) * I)
+static cplx c_sin(cplx a) { return MK(sin(creal(a)), cos(creal(a)) * cimag(a)); }
+static cplx c_cos(cplx a) { return MK(cos(creal(a)), -sin(creal(a)) * cimag(a)); }
+static cplx c_sqrt(cplx a) { double s = sqrt(creal(a)); return MK(s, 0.5 * cimag(a) / s); }
+static cplx c_pow(cplx a, cplx b)
+{
+    double x = creal(a), e = creal(b), r = pow(x, e);
+    double im = e * pow(x, e - 1.0) * cimag(a);
+    if (cimag(b) != 0.0) im += r * log(x) * cimag(b);
+    return MK(r, im);
+}
+/* The complex copy is called a few times per linearization, not per integrator step: gcc
+ * compiles it unoptimized (-O2 on it added ~23 s of compile here and saved ~1 ms a speed). */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC push_options
+#pragma GCC optimize ("O0")
+#endif
+#include "bicycle_complex.c"
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC pop_options
+#endif
+#endif
 
 #define GUID "@GUID@"
 #define COSIMULATION @COSIMULATION@   /* 1: also Co-Simulation, fixed-step RK4 (fmi2DoStep) */
@@ -31,6 +64,7 @@
 #define VR_TERMS (VR_A2 + 1)
 #define N_TERMS (NQ * NQ + NQ + NQ * 3 + NQ + NC * NQ + NC)
 #define N_VR (VR_TERMS + N_TERMS)
+#define DD_STEP 1e-20   /* the complex step, relative to the largest seed entry */
 
 static const double P_START[N_P] = {@P_START@};
 static const double X_START[2 * NQ] = {@X_START@};
@@ -185,17 +219,143 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Boolean v[]) { (void)vr; (void)v; return none_(c, n); }
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[]) { (void)vr; (void)v; return none_(c, n); }
 
-/* canGetAndSetFMUstate, canSerializeFMUstate, providesDirectionalDerivative: all false */
+/* canGetAndSetFMUstate, canSerializeFMUstate: false */
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) { (void)c; (void)s; return fmi2Error; }
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) { (void)c; (void)s; return fmi2Error; }
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) { (void)c; (void)s; return fmi2Error; }
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *n) { (void)c; (void)s; (void)n; return fmi2Error; }
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t n) { (void)c; (void)s; (void)b; (void)n; return fmi2Error; }
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t n, fmi2FMUstate *s) { (void)c; (void)b; (void)n; (void)s; return fmi2Error; }
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
-                                        const fmi2ValueReference z[], size_t nz,
+
+#if DIRECTIONAL
+/* The complex twin of Bicycle's values: states, inputs, parameters and everything evaluated. */
+typedef struct {
+    cplx q[NQ], dq[NQ], T[3], p[N_P], a1, a2;
+    cplx ddq[NQ], lam[NC], C[NC], terms[N_TERMS];
+} Twin;
+
+static cplx *twin_slot(Twin *w, fmi2ValueReference vr)
+{
+    if (vr < VR_DQ) return w->q + vr;
+    if (vr < VR_DERQ) return w->dq + (vr - VR_DQ);
+    if (vr < VR_T) return NULL;
+    if (vr < VR_C) return w->T + (vr - VR_T);
+    if (vr < VR_P) return NULL;
+    if (vr < VR_A1) return w->p + (vr - VR_P);
+    if (vr == VR_A1) return &w->a1;
+    if (vr == VR_A2) return &w->a2;
+    return NULL;
+}
+
+/* [M D'; D 0][ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C] in complex arithmetic:
+ * Gaussian elimination, pivots chosen on the real parts (the same solution as bx_forward's
+ * range-space solve; only the imaginary parts, the derivative, are read). 0 ok, 1 singular. */
+static int twin_evaluate(Twin *w)
+{
+    enum { N = NQ + NC };
+    cplx dyn[DYN_SIZE], con[CON_SIZE], A[N * N], x[N];
+    bxc_dynamics(w->q, w->dq, w->p, dyn);
+    bxc_constraints(w->q, w->dq, w->p, con);
+    const cplx *M = dyn, *F = dyn + NQ * NQ, *S = dyn + NQ * NQ + NQ;
+    const cplx *C = con, *D = con + NC, *bias = con + NC + NC * NQ;
+    for (int i = 0; i < N * N; ++i) A[i] = 0.0;
+    for (int i = 0; i < NQ; ++i) {
+        for (int j = 0; j < NQ; ++j) A[i * N + j] = M[i * NQ + j];
+        for (int k = 0; k < NC; ++k) A[i * N + NQ + k] = D[k * NQ + i];
+        x[i] = F[i] + S[i * 3] * w->T[0] + S[i * 3 + 1] * w->T[1] + S[i * 3 + 2] * w->T[2];
+    }
+    for (int k = 0; k < NC; ++k) {
+        cplx Ddq = 0.0;
+        for (int j = 0; j < NQ; ++j) { A[(NQ + k) * N + j] = D[k * NQ + j]; Ddq += D[k * NQ + j] * w->dq[j]; }
+        x[NQ + k] = -bias[k] - 2.0 * w->a1 * Ddq - w->a2 * w->a2 * C[k];
+    }
+    double scale = 0.0;
+    for (int i = 0; i < N * N; ++i) if (fabs(creal(A[i])) > scale) scale = fabs(creal(A[i]));
+    if (!(scale > 0.0) || !isfinite(scale)) return 1;
+    for (int k = 0; k < N; ++k) {
+        int piv = k;
+        for (int i = k + 1; i < N; ++i) if (fabs(creal(A[i * N + k])) > fabs(creal(A[piv * N + k]))) piv = i;
+        if (!(fabs(creal(A[piv * N + k])) > 1e-14 * scale)) return 1;
+        if (piv != k) {
+            for (int j = 0; j < N; ++j) { cplx t = A[k * N + j]; A[k * N + j] = A[piv * N + j]; A[piv * N + j] = t; }
+            cplx t = x[k]; x[k] = x[piv]; x[piv] = t;
+        }
+        for (int i = k + 1; i < N; ++i) {
+            cplx f = A[i * N + k] / A[k * N + k];
+            for (int j = k + 1; j < N; ++j) A[i * N + j] -= f * A[k * N + j];
+            x[i] -= f * x[k];
+        }
+    }
+    for (int i = N - 1; i >= 0; --i) {
+        cplx s = x[i];
+        for (int j = i + 1; j < N; ++j) s -= A[i * N + j] * x[j];
+        x[i] = s / A[i * N + i];
+    }
+    memcpy(w->ddq, x, sizeof w->ddq);
+    memcpy(w->lam, x + NQ, sizeof w->lam);
+    memcpy(w->C, C, sizeof w->C);
+    cplx grav[NQ], *t = w->terms;
+    bxc_qgrav(w->q, w->dq, w->p, grav);
+    memcpy(t, dyn, sizeof(cplx) * (NQ * NQ + NQ + NQ * 3)); t += NQ * NQ + NQ + NQ * 3;
+    memcpy(t, grav, sizeof grav); t += NQ;
+    memcpy(t, con + NC, sizeof(cplx) * (NC * NQ + NC));
+    return 0;
+}
+
+static int twin_value(Twin *w, fmi2ValueReference vr, cplx *out)
+{
+    if (vr >= N_VR) return 0;
+    if (vr >= VR_DERQ && vr < VR_DERDQ) { *out = w->dq[vr - VR_DERQ]; return 1; }
+    if (vr >= VR_DERDQ && vr < VR_T) { *out = w->ddq[vr - VR_DERDQ]; return 1; }
+    if (vr >= VR_TERMS) { *out = w->terms[vr - VR_TERMS]; return 1; }
+    if (vr >= VR_LAM && vr < VR_P) { *out = w->lam[vr - VR_LAM]; return 1; }
+    if (vr >= VR_C && vr < VR_P) { *out = w->C[vr - VR_C]; return 1; }
+    cplx *s = twin_slot(w, vr);
+    if (!s) return 0;
+    *out = *s;
+    return 1;
+}
+#endif
+
+/* dz = d(unknowns z)/d(knowns u) . du: the knowns are states, inputs or parameters, the
+ * unknowns any Real (derivatives, outputs); one complex evaluation per call. */
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference z[], size_t nz,
+                                        const fmi2ValueReference u[], size_t nu,
                                         const fmi2Real du[], fmi2Real dz[])
-{ (void)c; (void)u; (void)nu; (void)z; (void)nz; (void)du; (void)dz; return fmi2Error; }
+{
+    Bicycle *b = c;
+#if DIRECTIONAL
+    Twin w;
+    double scale = 0.0;
+    for (size_t k = 0; k < nu; ++k) {
+        if (!isfinite(du[k])) { logf_(b, fmi2Error, "fmi2GetDirectionalDerivative: non-finite seed"); return fmi2Error; }
+        if (fabs(du[k]) > scale) scale = fabs(du[k]);
+    }
+    for (int i = 0; i < NQ; ++i) { w.q[i] = b->q[i]; w.dq[i] = b->dq[i]; }
+    for (int i = 0; i < 3; ++i) w.T[i] = b->T[i];
+    for (int i = 0; i < N_P; ++i) w.p[i] = b->p[i];
+    w.a1 = b->a1;
+    w.a2 = b->a2;
+    const double h = scale > 0.0 ? DD_STEP / scale : 0.0;
+    for (size_t k = 0; k < nu; ++k) {
+        cplx *s = twin_slot(&w, u[k]);
+        if (!s) { logf_(b, fmi2Error, "fmi2GetDirectionalDerivative: a known is not a state, input or parameter"); return fmi2Error; }
+        *s += MK(0.0, h * du[k]);
+    }
+    if (twin_evaluate(&w)) { logf_(b, fmi2Error, "fmi2GetDirectionalDerivative: singular mass or constraint system"); return fmi2Error; }
+    for (size_t j = 0; j < nz; ++j) {
+        cplx v;
+        if (!twin_value(&w, z[j], &v)) { logf_(b, fmi2Error, "fmi2GetDirectionalDerivative: unknown value reference"); return fmi2Error; }
+        dz[j] = h > 0.0 ? cimag(v) / h : 0.0;
+        if (!isfinite(dz[j])) { logf_(b, fmi2Error, "fmi2GetDirectionalDerivative: non-finite derivative"); return fmi2Error; }
+    }
+    return fmi2OK;
+#else
+    (void)z; (void)nz; (void)u; (void)nu; (void)du; (void)dz;
+    logf_(b, fmi2Error, "this FMU was exported without directional derivatives");
+    return fmi2Error;
+#endif
+}
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi2OK; }
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *e)
