@@ -38,6 +38,7 @@ from pydrake.multibody.tree import MultibodyForces
 from ..base import CAPABILITIES, CapabilityError, Engine
 from ..batching import batched
 from ..facts import Costs, RunSetup
+from ..linear import eigenvalues_by_differences
 from .contact_study import SOFT_CONTACT
 from .kinematics import Kinematics
 from .options import DEFAULTS, RunSettings, settings_from
@@ -155,6 +156,11 @@ class DrakeEngine(Engine):
         return self._batched(one, q, dq, T[0] if single else T)
 
     # -- rolling constraints -----------------------------------------------------------
+    def eigenvalues(self, speeds):
+        """Roll/steer eigenvalues about upright straight running, (n, 4): central differences
+        of this engine's own accelerations on its own constraints (`engines.linear`)."""
+        return eigenvalues_by_differences(self, speeds)
+
     def constraint_residual(self, q, dq):
         return self._batched(lambda a, b: self.kin.terms(a, b, False, False).C, q, dq)
 
