@@ -30,20 +30,24 @@ moves by about the entries' error (these 4x4 matrices are well conditioned); onl
 ~1e-12 m/s of a speed where two eigenvalues coalesce (the weave pair forming, ~0.7 m/s on the
 benchmark) would the square-root growth of that error be visible.
 
-All perturbed states of all speeds go to the engine in one batch per call (Newton on the five
-distinct configurations, one ``forward_acceleration`` call on 8 n states).
+All perturbed states of all speeds go to the engine in one batch per call: Newton on the five
+distinct configurations (`upright_configurations`, speed-independent: `DifferenceEigenvalues`
+solves them once per engine), then one ``forward_acceleration`` call on 8 n states. An engine
+opts in by inheriting `DifferenceEigenvalues` and declaring ``eigenvalues``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from reference_model.linearize import LinearizationError, sort_eigenvalues
 from reference_model.names import COORDINATES
 
-__all__ = ["DIFFERENCE_STEP", "critical_speeds", "eigenvalues_by_differences"]
+__all__ = ["DIFFERENCE_STEP", "DifferenceEigenvalues", "Upright", "critical_speeds",
+           "eigenvalues_by_differences", "upright_configurations"]
 
 #: the central differences' step (rad for theta, gamma; rad/s for their rates): module docstring
 DIFFERENCE_STEP = 1e-7
@@ -61,15 +65,32 @@ def _speeds(speeds) -> np.ndarray:
     return v
 
 
-def _configurations(engine, h: float) -> np.ndarray:
-    """(5, 8): upright, then theta +-h, gamma +-h, each with beta on the engine's front contact."""
+@dataclass(frozen=True)
+class Upright:
+    """The five configurations the differences need (upright, then theta +-h, gamma +-h, each
+    with beta on the engine's front contact), ``q`` (5, 8), and the engine's constraint
+    Jacobian at each, ``D`` (5, 5, 8): independent of the speed, so solved once per engine."""
+
+    q: np.ndarray
+    D: np.ndarray
+    h: float
+
+
+def upright_configurations(engine, h: float = DIFFERENCE_STEP) -> Upright:
+    """`Upright` of ``engine``'s bicycle: Newton on row 0 of its ``constraint_residual`` (the
+    front contact's height) for beta, slope from its ``constraint_jacobian``."""
+    params = engine.model.params
+    if params.cv != 0.0:
+        raise LinearizationError(
+            f"model {engine.model.name!r}: cv = {params.cv!r} kg/m: with drag, upright straight "
+            "running is not a steady motion; fix: linearize a copy with cv = 0")
     q = np.zeros((5, 8))
     q[1, _THETA], q[2, _THETA], q[3, _GAMMA], q[4, _GAMMA] = h, -h, h, -h
     zero = np.zeros_like(q)
     for _ in range(_NEWTON_MAX):
         r = np.asarray(engine.constraint_residual(q, zero))[:, 0]
         if np.all(np.abs(r) < _NEWTON_TOL):
-            return q
+            return Upright(q, np.asarray(engine.constraint_jacobian(q)), float(h))
         slope = np.asarray(engine.constraint_jacobian(q))[:, 0, _BETA]
         q[:, _BETA] -= r / slope
     raise LinearizationError(
@@ -78,33 +99,29 @@ def _configurations(engine, h: float) -> np.ndarray:
         "check the model's geometry")
 
 
-def eigenvalues_by_differences(engine, speeds, h: float = DIFFERENCE_STEP) -> np.ndarray:
+def eigenvalues_by_differences(engine, speeds, h: float = DIFFERENCE_STEP,
+                               upright: Upright | None = None) -> np.ndarray:
     """(n, 4) complex: the roll/steer eigenvalues (1/s) of ``engine``'s bicycle about upright
     straight running at each forward speed in ``speeds`` (m/s), sorted as
     `reference_model.linearize.sort_eigenvalues` (module docstring: the method, its accuracy).
     Needs ``constraint_residual`` (the reference solvers' duck-typed method),
-    ``constraint_jacobian`` and ``forward_acceleration``; a model with drag (cv > 0) has no
+    ``constraint_jacobian`` and ``forward_acceleration``; ``upright``: the engine's
+    `upright_configurations` at ``h`` if already solved. A model with drag (cv > 0) has no
     steady upright motion and raises `LinearizationError`."""
     v = _speeds(speeds)
-    params = engine.model.params
-    if params.cv != 0.0:
-        raise LinearizationError(
-            f"model {engine.model.name!r}: cv = {params.cv!r} kg/m: with drag, upright straight "
-            "running is not a steady motion; fix: linearize a copy with cv = 0")
-    q5 = _configurations(engine, h)
-    D = np.asarray(engine.constraint_jacobian(q5))                       # (5, 5, 8)
+    up = upright if upright is not None and upright.h == h else upright_configurations(engine, h)
     # the 8 perturbations of x = [theta, gamma, d_theta, d_gamma]: (+h, -h) on each in turn;
     # the configuration each uses and its roll and steer rates
     config = np.array([1, 2, 3, 4, 0, 0, 0, 0])
     rates = np.zeros((8, 2))
     rates[4, 0], rates[5, 0], rates[6, 1], rates[7, 1] = h, -h, h, -h
     n = v.size
-    q = np.repeat(q5[config][None], n, axis=0).reshape(-1, 8)            # (8 n, 8)
+    q = np.repeat(up.q[config][None], n, axis=0).reshape(-1, 8)          # (8 n, 8)
     ind = np.zeros((n, 8, 3))
     ind[:, :, 0], ind[:, :, 2] = rates[None, :, 0], rates[None, :, 1]
-    ind[:, :, 1] = (v / params.R_rear)[:, None]
+    ind[:, :, 1] = (v / engine.model.params.R_rear)[:, None]
     ind = ind.reshape(-1, 3)
-    Dk = np.repeat(D[config][None], n, axis=0).reshape(-1, 5, 8)
+    Dk = np.repeat(up.D[config][None], n, axis=0).reshape(-1, 5, 8)
     dq = np.zeros((8 * n, 8))
     dq[:, _IND] = ind
     dq[:, _DEP] = -np.linalg.solve(Dk[:, :, _DEP], (Dk[:, :, _IND] @ ind[..., None]))[..., 0]
@@ -112,6 +129,21 @@ def eigenvalues_by_differences(engine, speeds, h: float = DIFFERENCE_STEP) -> np
     f = np.concatenate([rates[None].repeat(n, axis=0), ddq[:, :, [_THETA, _GAMMA]]], axis=2)
     A = (f[:, 0::2] - f[:, 1::2]).transpose(0, 2, 1) / (2.0 * h)         # (n, 4, 4): d f_i/d x_j
     return sort_eigenvalues(np.linalg.eigvals(A))
+
+
+class DifferenceEigenvalues:
+    """The ``eigenvalues`` capability by `eigenvalues_by_differences`, for an engine class to
+    inherit (before `engines.base.Engine`) and declare. The upright configurations depend on
+    the engine's model only, so they are solved on the first call and kept on the instance
+    (a root search calls it a dozen times: one batched acceleration call each, not ten)."""
+
+    def eigenvalues(self, speeds):
+        """Roll/steer eigenvalues about upright straight running, (n, 4): central differences
+        of this engine's own accelerations on its own constraints (`engines.linear`)."""
+        up = self.__dict__.get("_upright")
+        if up is None:
+            up = self.__dict__["_upright"] = upright_configurations(self)
+        return eigenvalues_by_differences(self, speeds, upright=up)
 
 
 def critical_speeds(eigenvalues: Callable[[np.ndarray], np.ndarray], speeds: tuple[float, float],

@@ -26,7 +26,7 @@ from reference_model.model import ForwardResult, torque_array
 
 from ..base import CAPABILITIES, CapabilityError, Engine
 from ..facts import Costs, RunSetup
-from ..linear import eigenvalues_by_differences
+from ..linear import DifferenceEigenvalues
 from .contact_study import SOFT_CONTACT
 from .options import DEFAULTS, RunSettings
 from .skeleton import build_skeleton
@@ -49,7 +49,7 @@ def _each(fn, n_vectors: int, *arrays):
                      for i in range(n)])
 
 
-class DartEngine(Engine):
+class DartEngine(DifferenceEigenvalues, Engine):
     """M, inverse dynamics, gravity, forces, rolling constraints and constrained accelerations
     from DART; forward runs on DART's contact (disc-contact models)."""
 
@@ -119,11 +119,6 @@ class DartEngine(Engine):
         return _each(self._forces, 2, q, dq, T[0] if single else T)
 
     # -- rolling constraints -----------------------------------------------------------
-    def eigenvalues(self, speeds):
-        """Roll/steer eigenvalues about upright straight running, (n, 4): central differences
-        of this engine's own accelerations on its own constraints (`engines.linear`)."""
-        return eigenvalues_by_differences(self, speeds)
-
     def constraint_residual(self, q, dq):
         return _each(lambda a, b: self._terms.kinematics(a, b, (), False, False).C, 2, q, dq)
 

@@ -38,7 +38,7 @@ from pydrake.multibody.tree import MultibodyForces
 from ..base import CAPABILITIES, CapabilityError, Engine
 from ..batching import batched
 from ..facts import Costs, RunSetup
-from ..linear import eigenvalues_by_differences
+from ..linear import DifferenceEigenvalues
 from .contact_study import SOFT_CONTACT
 from .kinematics import Kinematics
 from .options import DEFAULTS, RunSettings, settings_from
@@ -50,7 +50,7 @@ N_Q, N_C = 8, 5
 TERMS = frozenset(CAPABILITIES) - {"simulate"}
 
 
-class DrakeEngine(Engine):
+class DrakeEngine(DifferenceEigenvalues, Engine):
     """Drake's MultibodyPlant terms, all exact; forward runs on its own contact (disc only).
 
     The terms: mass matrix, inverse dynamics, gravity, bias term and frame kinematics; the runs:
@@ -156,11 +156,6 @@ class DrakeEngine(Engine):
         return self._batched(one, q, dq, T[0] if single else T)
 
     # -- rolling constraints -----------------------------------------------------------
-    def eigenvalues(self, speeds):
-        """Roll/steer eigenvalues about upright straight running, (n, 4): central differences
-        of this engine's own accelerations on its own constraints (`engines.linear`)."""
-        return eigenvalues_by_differences(self, speeds)
-
     def constraint_residual(self, q, dq):
         return self._batched(lambda a, b: self.kin.terms(a, b, False, False).C, q, dq)
 

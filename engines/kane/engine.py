@@ -44,7 +44,7 @@ from reference_model.scenarios import Scenario, run_forward
 
 from ..base import CapabilityError, Engine
 from ..facts import Costs, RunSetup
-from ..linear import eigenvalues_by_differences
+from ..linear import DifferenceEigenvalues
 from . import codegen
 from .names import MOORE_PARAMETERS
 
@@ -163,7 +163,7 @@ def eliminate(M, F, A, b) -> tuple[np.ndarray, np.ndarray] | None:
     return du, lam
 
 
-class KaneEngine(Engine):
+class KaneEngine(DifferenceEigenvalues, Engine):
     """Moore's Whipple bicycle (sympy KanesMethod, generated numpy code), disc contact only."""
 
     name = "kane"
@@ -255,11 +255,6 @@ class KaneEngine(Engine):
         qm, um, one = self._moore(q, dq)
         b = self.code.bias(qm, um, self.p)[:, :, 0]
         return self._out(ROW_SIGNS * b, one)
-
-    def eigenvalues(self, speeds):
-        """Roll/steer eigenvalues about upright straight running, (n, 4): central differences
-        of this engine's own accelerations on its own constraints (`engines.linear`)."""
-        return eigenvalues_by_differences(self, speeds)
 
     def constraint_residual(self, q, dq):
         """C = [rD_z, vC_x, vC_y, vD_x, vD_y] from Moore's constraint expressions (the

@@ -57,7 +57,7 @@ from reference_model.scenarios import Scenario, run_forward, run_inverse
 from ..base import CAPABILITIES, Engine, EngineError
 from ..batching import batched
 from ..facts import Costs, RunSetup
-from ..linear import eigenvalues_by_differences
+from ..linear import DifferenceEigenvalues
 
 try:
     import pinocchio as pin
@@ -174,7 +174,7 @@ for _s in _STATUS:
     _s.setflags(write=False)
 
 
-class PinocchioEngine(Engine):
+class PinocchioEngine(DifferenceEigenvalues, Engine):
     """Mass matrix, RNEA, gravity, rolling constraints, forces and forward runs from Pinocchio."""
 
     name = "pinocchio"
@@ -351,11 +351,6 @@ class PinocchioEngine(Engine):
         return self._batched(one, q, dq, T[0] if single else T)
 
     # -- rolling constraints -----------------------------------------------------------
-    def eigenvalues(self, speeds):
-        """Roll/steer eigenvalues about upright straight running, (n, 4): central differences
-        of this engine's own accelerations on its own constraints (`engines.linear`)."""
-        return eigenvalues_by_differences(self, speeds)
-
     def constraint_residual(self, q, dq):
         return self._batched(
             lambda a, b: np.array(self._kinematics(a, b, self._no_torque, False)[0]), q, dq)
