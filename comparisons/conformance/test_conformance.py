@@ -116,6 +116,8 @@ def test_trajectory_to_the_meaningful_horizon(candidate, conformance, tolerances
 
 
 def test_eigenvalues_against_the_exact_linearization(candidate, conformance, tolerances):
+    # (collected for every --model given; without --model, on every model, or at
+    # --conformance-depth quick on the benchmark only and without the critical speeds)
     """The engine's roll/steer eigenvalues (its ``eigenvalues`` capability) at 11 speeds 0-10
     m/s and its weave and capsize speeds against the reference's exact linearization
     (`reference_model.linearize`: complex-step derivatives of its own reduced equations), on
@@ -130,10 +132,12 @@ def test_eigenvalues_against_the_exact_linearization(candidate, conformance, tol
     free = model.with_params(model.params.replace(cv=0.0))
     eng = load_engine(candidate.spec, free, **conformance.options.get(candidate.spec, {}))
     v = np.linspace(0.0, 10.0, 11)
+    both = conformance.depth.critical_speeds
     check = judge_eigenvalues(candidate.spec, free.name, v, eng.eigenvalues(v),
-                              free.eigenvalues(v), engine_critical(eng.eigenvalues, (0.0, 10.0)),
-                              critical_speeds(free, np.array([0.0, 10.0])), (0.0, 10.0),
-                              tolerances)
+                              free.eigenvalues(v),
+                              engine_critical(eng.eigenvalues, (0.0, 10.0)) if both else (None,) * 2,
+                              critical_speeds(free, np.array([0.0, 10.0])) if both else (None,) * 2,
+                              (0.0, 10.0), tolerances)
     assert check.eigenvalues_passed, (f"eigenvalues: error {check.error:.2e} > "
                                       f"{check.tolerance:g} at v = {check.worst_speed:g} m/s")
     for c in check.critical:
