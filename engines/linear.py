@@ -147,19 +147,29 @@ class DifferenceEigenvalues:
 
 
 def critical_speeds(eigenvalues: Callable[[np.ndarray], np.ndarray], speeds: tuple[float, float],
-                    step: float = 0.1, xtol: float = 1e-12) -> tuple[float | None, float | None]:
+                    step: float = 0.5, xtol: float = 1e-12,
+                    known: tuple[np.ndarray, np.ndarray] | None = None
+                    ) -> tuple[float | None, float | None]:
     """(weave speed, capsize speed) in m/s within ``speeds`` of a bicycle whose eigenvalues at
     an array of speeds are ``eigenvalues(v)`` ((n, 4), sorted as ``sort_eigenvalues``); None
     where there is none. The definitions are `reference_model.linearize`'s: the weave speed is
     where the first complex pair's real part crosses from + to -; the capsize speed, above it,
     where a real eigenvalue crosses zero, i.e. where the product of the four eigenvalues
-    (det A = det K / det M) changes sign. A grid of ``step`` brackets each, brentq refines it
-    to ``xtol`` on the eigenvalues themselves."""
+    (det A = det K / det M) changes sign. A grid brackets each (``known``: (speeds, their
+    eigenvalues) already computed, else a grid of ``step`` over ``speeds``; 0.5 m/s keeps two
+    crossings of one mode apart on the bicycles here, and the capsize search starts at the
+    weave speed itself, so a capsize just above it is not skipped), then brentq refines it to
+    ``xtol`` on the eigenvalues themselves: about seven more calls per speed."""
     from scipy.optimize import brentq
 
     lo, hi = float(speeds[0]), float(speeds[1])
-    grid = np.linspace(lo, hi, max(int(np.ceil((hi - lo) / step)), 1) + 1)
-    lam = np.asarray(eigenvalues(grid))
+    if known is None:
+        grid = np.linspace(lo, hi, max(int(np.ceil((hi - lo) / step)), 1) + 1)
+        lam = np.asarray(eigenvalues(grid))
+    else:
+        grid, lam = np.asarray(known[0], dtype=float), np.asarray(known[1])
+        keep = (grid >= lo) & (grid <= hi)
+        grid, lam = grid[keep], lam[keep]
 
     def weave_re(s: float) -> float:
         one = np.asarray(eigenvalues(np.array([s])))[0]
@@ -176,11 +186,12 @@ def critical_speeds(eigenvalues: Callable[[np.ndarray], np.ndarray], speeds: tup
         weave = float(grid[i + 1]) if re[i + 1] == 0 else \
             float(brentq(weave_re, grid[i], grid[i + 1], xtol=xtol))
     d = np.prod(lam, axis=1).real
-    start = 0 if weave is None else int(np.searchsorted(grid, weave))
-    hits = [i for i in range(start, grid.size - 1) if np.sign(d[i]) * np.sign(d[i + 1]) < 0]
+    if weave is not None:
+        above = grid > weave
+        grid, d = np.r_[weave, grid[above]], np.r_[det(weave), d[above]]
+    hits = np.flatnonzero(np.sign(d[:-1]) * np.sign(d[1:]) < 0)
     capsize = None
-    if hits:
-        i = hits[0]
-        a = grid[i] if weave is None else max(grid[i], weave)
-        capsize = float(brentq(det, a, grid[i + 1], xtol=xtol))
+    if hits.size:
+        i = int(hits[0])
+        capsize = float(brentq(det, grid[i], grid[i + 1], xtol=xtol))
     return weave, capsize

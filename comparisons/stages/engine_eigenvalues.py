@@ -12,9 +12,10 @@ knife-edge disc and the thesis's bicycle on it); a model with drag is linearized
 model the front contact (or cannot represent the bicycle) is *not run* on it, with the
 reason, never a failure; an engine without the capability gets no rows.
 
-Cost (measured on the 2-core machine, loaded): one task per engine and model, ~0.05 s for the
-grid's 21 speeds (one batch of 168 states) and 0.06-0.25 s for the two critical speeds'
-root finding, plus building the engine. Not run by ``--quick``.
+Cost: one task per engine and model: the grid's 21 speeds (one batch of 168 states), which
+also bracket the critical speeds, then about 14 calls of one speed (8 states each) for their
+root finding, plus building the engine: measured 0.05 s (Pinocchio) to 0.5 s (DART, ~1 ms per
+state) per task on the 2-core machine. Not run by ``--quick``.
 """
 
 from __future__ import annotations
@@ -57,12 +58,14 @@ def _reference(model, speeds) -> tuple[np.ndarray, tuple]:
 
 def linearized(engine, speeds, fine: tuple[float, ...] = ()) -> dict:
     """A built engine's eigenvalues at ``speeds`` (and at ``fine``, for a figure) and its
-    critical speeds in ``SPEED_RANGE``, with the time it took."""
+    critical speeds in ``SPEED_RANGE``, bracketed on those (the finer if given), with the
+    time it took."""
     from engines.linear import critical_speeds
     t0 = time.perf_counter()
     lam = np.asarray(engine.eigenvalues(np.asarray(speeds)))
     curve = np.asarray(engine.eigenvalues(np.asarray(fine))) if fine else None
-    weave, capsize = critical_speeds(engine.eigenvalues, SPEED_RANGE)
+    known = (np.asarray(fine), curve) if fine else (np.asarray(speeds), lam)
+    weave, capsize = critical_speeds(engine.eigenvalues, SPEED_RANGE, known=known)
     return {"lam": lam, "curve": curve, "critical": (weave, capsize),
             "seconds": time.perf_counter() - t0}
 

@@ -63,7 +63,11 @@ def _speed(x) -> str:
 
 
 def _shift(x, ref) -> str:
-    return "-" if x is None or ref is None else f"{x - ref:+.6f}"
+    """The shift of a critical speed (m/s): 6 decimals, or the round-off's size when smaller."""
+    if x is None or ref is None:
+        return "-"
+    d = x - ref
+    return f"{d:+.6f}" if abs(d) >= 5e-7 else f"{d:+.0e}"
 
 
 def option_study_section(facts, study, model: str, values: list[dict],
