@@ -86,6 +86,10 @@ def test_critical_speeds_of_any_eigenvalues_are_the_references_own():
     assert abs(w - weave_speed(m, (0.0, 10.0))) < 1e-10
     assert abs(c - capsize_speed(m, (0.0, 10.0))) < 1e-10
     assert critical_speeds(m.eigenvalues, (0.0, 3.0)) == (None, None)
+    # a bracket holding both speeds (3.33-6.67 m/s): the capsize search starts at the weave
+    # speed itself, not at the next grid point (where it would miss it)
+    w3, c3 = critical_speeds(m.eigenvalues, (0.0, 10.0), step=3.5)
+    assert abs(w3 - w) < 1e-10 and c3 is not None and abs(c3 - c) < 1e-10
 
 
 def _check(got, model, difference=""):
