@@ -183,7 +183,8 @@ class EngineFacts:
 
     @property
     def has_terms(self) -> bool:
-        return bool(self.capabilities - {"simulate"})
+        """Whether it computes a term (a capability beyond its runs and its linearization)."""
+        return bool(self.capabilities - {"simulate", "eigenvalues"})
 
     def setup_label(self, setup: RunSetup) -> str:
         return self.name if not setup.suffix else f"{self.name}-{setup.suffix}"
