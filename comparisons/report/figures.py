@@ -216,7 +216,7 @@ def option_study(engine, label, quantity, unit, values, reference_value, v, re, 
     ax.axhline(0.0, color="0.3", lw=0.6)
     ax.set_ylim(max(float(np.min(ref_re)), -10.0) - 0.5, float(np.max(ref_re)) + 0.5)
     ax.set_xlabel("forward speed v [m/s]")
-    ax.set_ylabel("real part of eigenvalue [1/s] (the castor mode leaves below -10)")
+    ax.set_ylabel("eigenvalue real part [1/s]")
     ax.set_title(f"{model}: {label}, {quantity}")
     ax.legend(fontsize=7, loc="lower left")
     ax.grid(True, lw=0.3)

@@ -123,7 +123,12 @@ def option_study_section(facts, study, model: str, values: list[dict],
                    f"{SPEED_RANGE[0]:g}-{SPEED_RANGE[1]:g} m/s")
     if done:
         sec.figure(f"option_study_{slug(facts.name)}_{slug(study.option)}_{slug(model)}.png",
-                   "option_study", engine=facts.name, label=facts.label,
+                   "option_study", caption=(
+                       f"Left: the real parts of the four roll/steer eigenvalues against speed at "
+                       f"each {study.quantity} (the reference's exact ones in black; the castor "
+                       f"mode leaves the axes below -10 /s). Right: the weave and capsize speeds "
+                       f"against the {study.quantity}, the reference's circled."),
+                   engine=facts.name, label=facts.label,
                    quantity=study.quantity, unit=study.unit,
                    values=[v["value"] for v in done], reference_value=study.reference_value,
                    v=np.asarray(CURVE), re=np.array([np.asarray(v["curve"]).real for v in done]),
