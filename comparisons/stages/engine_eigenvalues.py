@@ -29,9 +29,9 @@ from ..judgments.rows import Comparison
 from .results import Section
 from .stage import Assembled, Plan, Stage
 
-__all__ = ["DEFAULT_MODELS", "EngineEigenvaluesStage", "GRID", "SPEED_RANGE",
+__all__ = ["DEFAULT_MODELS", "EngineEigenvaluesStage", "GRID", "SPEED_RANGE", "check_of",
            "engine_eigenvalues_section", "engine_linearization", "linearization_model",
-           "linearized"]
+           "linearized", "reference_linearization"]
 
 #: the comparison's speed grid (m/s): 21 speeds; the nearest to a coalescence of two
 #: eigenvalues (where the error of any linearization grows like its square root) is 0.5 m/s,
@@ -52,7 +52,9 @@ def linearization_model(spec: str):
     return m, ""
 
 
-def _reference(model, speeds) -> tuple[np.ndarray, tuple]:
+def reference_linearization(model, speeds) -> tuple[np.ndarray, tuple]:
+    """The reference's exact eigenvalues at ``speeds`` and its (weave, capsize) speeds in
+    ``SPEED_RANGE``."""
     from ..judgments.eigenvalues import critical_speeds
     return model.eigenvalues(np.asarray(speeds)), critical_speeds(model, np.array(SPEED_RANGE))
 
@@ -87,7 +89,7 @@ def engine_linearization(spec: str, options: dict, model_spec: str, label: str =
     if not eng.supports("eigenvalues"):
         return {**out, "not_run": "its options leave it without the eigenvalues capability"}
     mine = linearized(eng, GRID)
-    ref_lam, ref_crit = _reference(model, GRID)
+    ref_lam, ref_crit = reference_linearization(model, GRID)
     return {**out, "lam": mine["lam"], "critical": mine["critical"],
             "seconds": mine["seconds"], "ref_lam": ref_lam, "ref_critical": ref_crit}
 

@@ -28,7 +28,8 @@ import numpy as np
 
 from ..judgments.engine_eigenvalues import check_rows, judge_eigenvalues
 from ..judgments.rows import Comparison
-from .engine_eigenvalues import GRID, SPEED_RANGE, _reference, linearization_model, linearized
+from .engine_eigenvalues import (GRID, SPEED_RANGE, linearization_model, linearized,
+                                 reference_linearization)
 from .results import Section
 from .stage import Assembled, Plan, Stage
 
@@ -52,7 +53,7 @@ def option_value(spec: str, options: dict, option: str, value: float, model_spec
     except (UnsupportedModel, CapabilityError) as exc:
         return {**out, "not_run": f"not run on this model: {exc}"}
     mine = linearized(eng, GRID, CURVE)
-    ref_lam, ref_crit = _reference(model, GRID)
+    ref_lam, ref_crit = reference_linearization(model, GRID)
     return {**out, "lam": mine["lam"], "curve": mine["curve"], "critical": mine["critical"],
             "seconds": mine["seconds"], "ref_lam": ref_lam, "ref_curve": model.eigenvalues(
                 np.asarray(CURVE)), "ref_critical": ref_crit}
