@@ -142,7 +142,9 @@ class OptionStudy:
     the others it is reported, never failed. ``values`` in SI (``unit``); ``quantity`` names
     the option in words, ``difference`` says in one line what the other values change,
     ``why`` why these values; ``quick_values`` the values a ``--quick`` run uses (None: not
-    run in --quick)."""
+    run in --quick); ``prepare`` the work every value's build shares (generating the code of
+    a non-default variant), run once in the main process before the study's workers fork,
+    only when the study runs (None: nothing)."""
 
     option: str
     quantity: str
@@ -152,6 +154,7 @@ class OptionStudy:
     difference: str
     why: str = ""
     quick_values: tuple[float, ...] | None = None
+    prepare: Callable[[], None] | None = None
 
     def __post_init__(self):
         if self.reference_value not in self.values:

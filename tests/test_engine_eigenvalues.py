@@ -228,3 +228,23 @@ def test_the_crown_study_on_symbrim():
     capsize = [e["capsize_speed"] for e in summary["values"]]
     assert all(a > b for a, b in zip(weave, weave[1:])), weave
     assert all(a > b for a, b in zip(capsize, capsize[1:])), capsize
+
+
+def test_an_option_studys_shared_work_is_prepared_once_when_it_runs():
+    """The study's ``prepare`` (SymBRiM's: the toroidal code, a minute cold, more than one
+    task's time limit allows) runs in the main process when the stage runs, not in --quick
+    (where the study does not run)."""
+    from comparisons.stages.option_study import OptionStudyStage
+    from engines.facts import OptionStudy
+    calls = []
+    study = OptionStudy("crown_radius", "crown radius", "m", (0.0, 0.01), 0.0, "a torus",
+                        prepare=lambda: calls.append(1))
+    fake = types.SimpleNamespace(name="x", spec="x", label="X", capabilities={"eigenvalues"},
+                                 option_studies=(study,))
+    for quick, expected in ((True, []), (False, [1])):
+        plan = _plan((), quick=quick)
+        plan = type(plan)(plan.opts, (), {**plan.facts, "x": fake})
+        calls.clear()
+        OptionStudyStage().prepare(plan)
+        assert calls == expected
+        assert len(OptionStudyStage().tasks(plan)) == (0 if quick else 2)

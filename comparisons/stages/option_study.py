@@ -155,6 +155,14 @@ class OptionStudyStage(Stage):
         return [(f, s) for f in plan.engines(lambda f: "eigenvalues" in f.capabilities)
                 for s in f.option_studies if not plan.quick or s.quick_values]
 
+    def prepare(self, plan: Plan) -> None:
+        """Each study's declared shared work (e.g. the generated code of the option's variant:
+        cold, a minute, which one task's time limit would not allow), once before the workers
+        fork."""
+        for f, s in self._studies(plan):
+            if s.prepare is not None:
+                s.prepare()
+
     def tasks(self, plan: Plan) -> list:
         from .pool import Task
         models = [m.spec for m in plan.opts.models] or [DEFAULT_MODEL]

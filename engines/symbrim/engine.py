@@ -41,6 +41,11 @@ from . import codegen
 
 __all__ = ["CROWN_STUDY", "SymbrimEngine", "symbrim_parameters"]
 
+def _prepare_torus() -> None:
+    """The toroidal variant's generated code (a second derivation: ~15-65 s cold, cached)."""
+    codegen.load(front_crown=True)
+
+
 #: the declared model difference of ``crown_radius`` > 0, and the values it is studied at
 CROWN_STUDY = OptionStudy(
     option="crown_radius", quantity="front tyre crown radius", unit="m",
@@ -51,7 +56,8 @@ CROWN_STUDY = OptionStudy(
     why="0 is the reference's knife edge; 5-30 mm spans the cross-section radii of real tyres "
         "(half the width of a 10-60 mm tyre: track and road tyres about 10-15 mm, city and "
         "mountain-bike tyres 20-30 mm); 30 mm is under a tenth of the benchmark's R_front "
-        "(0.35 m), where the torus stays a tyre")
+        "(0.35 m), where the torus stays a tyre",
+    prepare=_prepare_torus)
 
 
 def symbrim_parameters(params, crown_radius: float = 0.0) -> np.ndarray:
