@@ -163,13 +163,21 @@ class OptionStudyStage(Stage):
             if s.prepare is not None:
                 s.prepare()
 
+    @staticmethod
+    def _models(plan: Plan, facts) -> tuple[list[str], list]:
+        """(the model specs the study runs on, the ``--model`` s whose front contact the
+        engine does not model)."""
+        if not plan.opts.models:
+            return [DEFAULT_MODEL], []
+        return ([m.spec for m in plan.opts.models if m.contact in facts.contacts],
+                [m for m in plan.opts.models if m.contact not in facts.contacts])
+
     def tasks(self, plan: Plan) -> list:
         from .pool import Task
-        models = [m.spec for m in plan.opts.models] or [DEFAULT_MODEL]
         out = []
         for f, s in self._studies(plan):
             values = s.quick_values if plan.quick else s.values
-            for spec in models:
+            for spec in self._models(plan, f)[0]:
                 out += [Task((f.spec, s.option, spec, x), option_value,
                              (f.spec, plan.options_for(f.spec), s.option, x, spec), 0.4,
                              f"{spec}: {f.label} at {s.option} = {x:g} {s.unit}", f.spec)
@@ -193,6 +201,17 @@ class OptionStudyStage(Stage):
                     out.sections.append(sec)
                     summary.append(entry)
                 out.sections += failed
+            for m in self._models(plan, f)[1]:     # a declared limitation: said, not failed
+                why = (f"not run on this model: {f.label} models the front contact(s) "
+                       f"{', '.join(f.contacts)}, not {m.contact!r}")
+                sec = Section(f"Option study: {f.label}'s {s.quantity} on {m.name}")
+                sec.text(f"{why}.")
+                sec.comparisons.append(Comparison.of({
+                    "quantity": f"option study {s.option}: roll/steer eigenvalues",
+                    "scenario": "-", "model": m.name, "engines": ["reference", f.name],
+                    "max_error": None, "tolerance": None, "passed": None, "localized_to": why,
+                    "note": why}))
+                out.sections.append(sec)
         if summary:
             out.summary["option_studies"] = summary
         return out
