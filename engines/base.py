@@ -15,8 +15,12 @@ Sign conventions are the thesis's (see `reference_model.model`):
 * ``constraint_bias(q, dq)``              dD dq (5,)
 * ``forward_acceleration(q, dq, torques)`` exact constrained ddq (8,)
 * ``simulate(scenario, **options)``       a `reference_model.solvers.Trajectory`
+* ``eigenvalues(speeds)``                 the roll/steer eigenvalues (1/s) about upright
+  straight running at each forward speed (m/s), (n, 4) complex, sorted as
+  `reference_model.linearize.sort_eigenvalues` (`engines.linear` computes them from an
+  engine's own constraints and accelerations)
 
-Each takes one state (8,) or a batch (N, 8). The full contract for engine authors (coordinates,
+Each term takes one state (8,) or a batch (N, 8). The full contract for engine authors (coordinates,
 signs, units, shapes, the rolling contact, statuses, registration, errors) is docs/engines.md.
 """
 
@@ -25,11 +29,12 @@ from __future__ import annotations
 from reference_model import Model
 
 # The facts' attributes below are typed by `engines.facts` (RunSetup, Costs, FixedStep,
-# SoftContact), which reads them; not imported here, so the types stay free of the registry.
+# SoftContact, OptionStudy), which reads them; not imported here, so the types stay free of
+# the registry.
 
 CAPABILITIES = (
     "mass_matrix", "inverse_dynamics", "gravity", "generalized_forces", "constraint_jacobian",
-    "constraint_bias", "forward_acceleration", "simulate",
+    "constraint_bias", "forward_acceleration", "simulate", "eigenvalues",
 )
 
 
@@ -108,6 +113,9 @@ class Engine:
     #: the studies it contributes: a fixed-step integrator's, a soft contact's (or None)
     fixed_step: FixedStep | None = None
     soft_contact: SoftContact | None = None
+    #: options whose other values are another bicycle, each studied against the option
+    #: (`engines.facts.OptionStudy`; needs the ``eigenvalues`` capability)
+    option_studies: tuple[OptionStudy, ...] = ()
 
     def __init__(self, model: Model):
         self.model = model
@@ -151,3 +159,6 @@ class Engine:
 
     def simulate(self, scenario, **options):
         self._missing("simulate")
+
+    def eigenvalues(self, speeds):
+        self._missing("eigenvalues")

@@ -17,7 +17,10 @@ of its `engines.base.Engine` subclass, typed by the dataclasses here, and read t
 * the studies it contributes, as facts the studies read: ``fixed_step`` (a fixed-step
   integrator: convergence order, energy drift, trajectories of each variant, the IFToMM
   manoeuvres) and ``soft_contact`` (a soft contact: slip, penetration, lift-off and the
-  refinement of its settings). A second engine declaring the same gets the same study.
+  refinement of its settings), and ``option_studies`` (an option whose other values make
+  another bicycle: each value's eigenvalues and critical speeds against the option, the
+  reference's value judged, the others a declared model difference). A second engine
+  declaring the same gets the same study.
 
 Nothing here imports an engine's library: reading the facts is cheap.
 """
@@ -28,7 +31,8 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Callable
 
-__all__ = ["Costs", "EngineFacts", "FixedStep", "Refinement", "RunSetup", "SoftContact",
+__all__ = ["Costs", "EngineFacts", "FixedStep", "OptionStudy", "Refinement", "RunSetup",
+           "SoftContact",
            "engine_facts", "options_dict"]
 
 Options = tuple[tuple[str, object], ...]
@@ -129,6 +133,36 @@ class SoftContact:
 
 
 @dataclass(frozen=True)
+class OptionStudy:
+    """An engine option whose values other than ``reference_value`` build another bicycle than
+    the reference's (e.g. a tyre's crown radius): a declared model difference, quantified by
+    the option study (the roll/steer eigenvalues against speed and the weave and capsize
+    speeds at each of ``values``; needs the ``eigenvalues`` capability). At
+    ``reference_value`` the engine's model is the reference's and is judged against it; at
+    the others it is reported, never failed. ``values`` in SI (``unit``); ``quantity`` names
+    the option in words, ``difference`` says in one line what the other values change,
+    ``why`` why these values; ``quick_values`` the values a ``--quick`` run uses (None: not
+    run in --quick); ``prepare`` the work every value's build shares (generating the code of
+    a non-default variant), run once in the main process before the study's workers fork,
+    only when the study runs (None: nothing)."""
+
+    option: str
+    quantity: str
+    unit: str
+    values: tuple[float, ...]
+    reference_value: float
+    difference: str
+    why: str = ""
+    quick_values: tuple[float, ...] | None = None
+    prepare: Callable[[], None] | None = None
+
+    def __post_init__(self):
+        if self.reference_value not in self.values:
+            raise ValueError(f"option study {self.option!r}: reference_value "
+                             f"{self.reference_value!r} must be one of values {self.values!r}")
+
+
+@dataclass(frozen=True)
 class EngineFacts:
     """One engine's declarations, read from its class (`engine_facts`)."""
 
@@ -146,12 +180,14 @@ class EngineFacts:
     costs: Costs
     fixed_step: FixedStep | None = None
     soft_contact: SoftContact | None = None
+    option_studies: tuple[OptionStudy, ...] = ()
     has_inverse_runs: bool = False
     requires: tuple[str, ...] = field(default=())
 
     @property
     def has_terms(self) -> bool:
-        return bool(self.capabilities - {"simulate"})
+        """Whether it computes a term (a capability beyond its runs and its linearization)."""
+        return bool(self.capabilities - {"simulate", "eigenvalues"})
 
     def setup_label(self, setup: RunSetup) -> str:
         return self.name if not setup.suffix else f"{self.name}-{setup.suffix}"
@@ -183,5 +219,6 @@ def engine_facts(spec: str) -> EngineFacts:
         costs=getattr(cls, "costs", None) or Costs(),
         fixed_step=getattr(cls, "fixed_step", None),
         soft_contact=getattr(cls, "soft_contact", None),
+        option_studies=tuple(getattr(cls, "option_studies", ()) or ()),
         has_inverse_runs=callable(getattr(cls, "run_inverse", None)),
         requires=requires)

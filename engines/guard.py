@@ -8,6 +8,8 @@ built-ins included) replaces each declared capability of the instance by a check
   "The capabilities"), every entry finite; ``None``, a string, an object array, a complex
   array (its imaginary part would be dropped by the first ``float()``), the wrong shape or a
   NaN is refused;
+* ``eigenvalues`` must return a finite complex (or real) array of shape (n, 4) for n speeds
+  (one speed given as a scalar: (1, 4));
 * ``simulate`` must return a `reference_model.solvers.Trajectory`-like object: ``t`` (N,),
   ``q`` and ``dq`` (N, 8) (and ``ddq`` (N, 8), ``C`` (N, 5), ``T`` (N, 3) where given), real
   and finite, a known status and a text message.
@@ -33,7 +35,8 @@ import numpy as np
 
 from .base import CAPABILITIES, CapabilityError, EngineError
 
-__all__ = ["EngineCallError", "MAX_MESSAGE", "STATUSES", "check_term", "check_trajectory",
+__all__ = ["EngineCallError", "MAX_MESSAGE", "STATUSES", "check_eigenvalues", "check_term",
+           "check_trajectory",
            "cut", "describe", "engine_interrupt", "guard", "is_guarded", "sigint_handler"]
 
 #: characters of an engine's message kept in a report line (a 10^6-character message, or a
@@ -126,6 +129,31 @@ def check_term(name: str, value, q, what: str | None = None) -> np.ndarray:
         raise EngineCallError(f"{what} returned shape {arr.shape} for q of shape {shape}; "
                               f"expected {want}")
     return _finite(arr, what)
+
+
+def check_eigenvalues(value, speeds, what: str = "eigenvalues") -> np.ndarray:
+    """``value``, returned by ``eigenvalues(speeds)``, as a complex (n, 4) array for the n
+    speeds asked about; `EngineCallError` otherwise (None, text, the wrong shape, NaN)."""
+    if value is None or isinstance(value, (str, bytes)):
+        raise EngineCallError(f"{what} returned {_kind(value)}, not an array")
+    try:
+        arr = np.asarray(value)
+    except Exception as exc:   # noqa: BLE001 - ragged lists, objects that refuse
+        raise EngineCallError(f"{what} returned {_kind(value)} that is not an array "
+                              f"({type(exc).__name__}: {cut(exc, 80)})") from None
+    if arr.dtype.kind not in "iufc":
+        raise EngineCallError(f"{what} returned {_kind(value)} of dtype {arr.dtype}, not numbers")
+    want = (np.atleast_1d(np.asarray(speeds, dtype=float)).size, 4)
+    if arr.shape != want:
+        raise EngineCallError(f"{what} returned shape {arr.shape} for {want[0]} speed(s); "
+                              f"expected {want}")
+    arr = arr.astype(complex, copy=False)
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        raise EngineCallError(f"{what} returned {int(bad.sum())} non-finite value(s) (NaN or "
+                              f"inf) of {arr.size}; raise instead when a speed cannot be "
+                              "linearized")
+    return arr
 
 
 def check_trajectory(traj, what: str = "simulate"):
@@ -235,6 +263,8 @@ class _Guarded:
                                   "not end the process: raise an exception)") from None
         if name == "simulate":
             return check_trajectory(value, what)
+        if name == "eigenvalues":
+            return check_eigenvalues(value, args[0] if args else kwargs.get("speeds"), what)
         return check_term(name, value, args[0] if args else kwargs.get("q"), what)
 
 

@@ -46,3 +46,9 @@ class ReferenceEngine(Engine):
 
     def simulate(self, scenario: Scenario, **options):
         return run_forward(self.model, scenario, **options)
+
+    def eigenvalues(self, speeds):
+        """The exact linearization's (`reference_model.linearize`: complex-step derivatives of
+        the reduced equations), (n, 4)."""
+        import numpy as np
+        return self.model.eigenvalues(np.atleast_1d(np.asarray(speeds, dtype=float)))

@@ -46,7 +46,7 @@ def test_terms_agree_with_the_reference_at_random_states(built, name):
     model, eng = built[name]
     rows = compare_terms(load_engine("reference", model), eng, random_states(12, seed=3),
                          TOLERANCES)
-    assert {r.quantity for r in rows} == set(DartEngine.capabilities) - {"simulate"}
+    assert {r.quantity for r in rows} == set(DartEngine.capabilities) - {"simulate", "eigenvalues"}
     bad = [r.describe() for r in rows if not r.passed]
     assert not bad, bad
 

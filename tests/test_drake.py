@@ -50,7 +50,7 @@ def test_every_term_agrees_with_the_reference_at_random_states(pairs, name):
     formulations of the same equations. (Measured on 200 states: 2.8e-15 at most, ddq 8e-14.)"""
     ref, drk = pairs[name]
     results = compare_terms(ref, drk, random_states(20, seed=7), TOLERANCES)
-    assert {r.quantity for r in results} == set(DrakeEngine.capabilities) - {"simulate"}
+    assert {r.quantity for r in results} == set(DrakeEngine.capabilities) - {"simulate", "eigenvalues"}
     bad = [r.describe() for r in results if not r.passed]
     assert not bad, bad
 

@@ -123,6 +123,24 @@ def test_negative_control_leaves_unrelated_terms_passing():
     assert results["constraint_bias"].passed
 
 
+def _check_eigenvalues(name, model, eng):
+    """The ``eigenvalues`` capability against the reference's exact linearization
+    (`reference_model.linearize`, complex steps of its own reduced equations) at 1 and 5 m/s,
+    on the model without drag (no steady motion otherwise), within [engine_eigenvalues]; an
+    engine without it raises CapabilityError naming it."""
+    from comparisons.judgments.engine_eigenvalues import matched_error
+    if "eigenvalues" not in eng.capabilities:
+        with pytest.raises(CapabilityError, match="eigenvalues"):
+            eng.eigenvalues([1.0])
+        return
+    free = model.with_params(model.params.replace(cv=0.0))
+    v = np.array([1.0, 5.0])
+    lam = np.asarray(load_engine(name, free).eigenvalues(v))
+    assert lam.shape == (2, 4)
+    err = float(matched_error(lam, free.eigenvalues(v)).max())
+    assert err <= TOLERANCES["engine_eigenvalues"].tolerance, err
+
+
 # -- the interface itself -----------------------------------------------------------------
 
 def test_unknown_engine_is_a_clear_error(model):
@@ -161,7 +179,7 @@ def test_declared_capabilities_are_implemented(model, name):
         "forward_acceleration": (lambda e: e.forward_acceleration(q, dq, T),
                                  model.forward_acceleration(q, dq, T)),
     }
-    assert set(calls) | {"simulate"} == set(CAPABILITIES)
+    assert set(calls) | {"simulate", "eigenvalues"} == set(CAPABILITIES)
     for cap, (call, expected) in calls.items():
         if cap not in eng.capabilities:
             with pytest.raises(CapabilityError, match=cap):
@@ -172,6 +190,7 @@ def test_declared_capabilities_are_implemented(model, name):
         tol = TOLERANCES[cap]
         err = np.abs(out - expected).max() / tol.normalizer(expected)
         assert err <= tol.tolerance, f"{cap}: {err:.2e} > {tol.tolerance:.0e}"
+    _check_eigenvalues(name, model, eng)
     if "simulate" in eng.capabilities:
         # 0.1 s of the check's straight rolling: xc = R_rear psi_dot t exactly (steady state,
         # tests/test_solvers.py); DOP853 at rtol 1e-10 over 0.5 m: 1e-9 m

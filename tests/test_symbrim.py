@@ -233,16 +233,15 @@ def test_a_crown_lifts_the_leaned_front_hub_as_a_torus_does(pairs):
 
 
 def test_the_crown_studys_linearization_at_zero_crown_is_the_references(pairs):
-    """The study's eigenvalues (central differences of the engine's own accelerations, beta
-    and the dependent rates from its own constraints) at crown 0 against the reference's
-    exact linearization (complex step, its own derivation) on the benchmark bicycle at 2, 4
-    and 6 m/s. Tolerance 1e-8 relative to the largest |eigenvalue| (16 /s): the differences'
-    truncation and round-off, measured 3.2e-12 absolute."""
-    from engines.symbrim.crown import crown_eigenvalues
+    """The engine's eigenvalues (`engines.linear`: central differences of its own
+    accelerations, beta and the dependent rates from its own constraints) at crown 0 against
+    the reference's exact linearization (complex step, its own derivation) on the benchmark
+    bicycle at 2, 4 and 6 m/s. Tolerance 1e-8 relative to the largest |eigenvalue| (16 /s):
+    the differences' truncation and round-off, measured ~4e-14 absolute at h = 1e-7."""
     ref, eng = pairs["benchmark"]
     v = np.array([2.0, 4.0, 6.0])
     theirs = ref.model.eigenvalues(v)
-    assert np.max(np.abs(crown_eigenvalues(eng, v) - theirs)) < 1e-8 * np.max(np.abs(theirs))
+    assert np.max(np.abs(eng.eigenvalues(v) - theirs)) < 1e-8 * np.max(np.abs(theirs))
 
 
 @pytest.mark.slow
@@ -253,12 +252,11 @@ def test_a_crown_lowers_the_weave_speed(pairs):
     at 1, 2, 3 cm); the bracket of the root search to 1e-6 m/s."""
     from scipy.optimize import brentq
 
-    from engines.symbrim.crown import crown_eigenvalues
     _, eng = pairs["benchmark"]
     speeds = []
     for c in (0.0, 0.01, 0.02):
         e = SymbrimEngine(eng.model, crown_radius=c)
-        speeds.append(brentq(lambda s: crown_eigenvalues(e, [s])[0][0].real, 3.0, 6.5,
+        speeds.append(brentq(lambda s: e.eigenvalues([s])[0][0].real, 3.0, 6.5,
                              xtol=1e-7))
     assert abs(speeds[0] - 4.2923828604) < 1e-5
     assert speeds[0] - 0.1 > speeds[1] > speeds[2] + 0.1

@@ -36,14 +36,19 @@ class Candidate:
 
 @dataclass(frozen=True)
 class Depth:
-    """How many cases a session checks: ``examples`` hypothesis states per term check, and the
-    models of the forward runs (None: `models.DEFAULT_TRAJECTORY_MODELS`)."""
+    """How many cases a session checks: ``examples`` hypothesis states per term check, the
+    models of the forward runs (None: `models.DEFAULT_TRAJECTORY_MODELS`), the models of the
+    eigenvalue check (None: every model) and whether it also finds the critical speeds (a
+    dozen more calls of the capability: 0.03-0.24 s per engine)."""
 
     examples: int
     trajectory_models: tuple[str, ...] | None = None
+    eigenvalue_models: tuple[str, ...] | None = None
+    critical_speeds: bool = True
 
 
-DEPTHS = {"full": Depth(25), "quick": Depth(5, ("thesis-disc",))}
+DEPTHS = {"full": Depth(25),
+          "quick": Depth(5, ("thesis-disc",), ("benchmark",), critical_speeds=False)}
 
 
 @dataclass
@@ -202,6 +207,9 @@ def pytest_generate_tests(metafunc):
         from .models import DEFAULT_TRAJECTORY_MODELS   # forward runs are the costly checks
         keep = conf.depth.trajectory_models or DEFAULT_TRAJECTORY_MODELS
         cands = [c for c in cands if c.model_name in keep]
+    if "eigenvalues" in needs and not metafunc.config.getoption("bx_models") \
+            and conf.depth.eigenvalue_models is not None:
+        cands = [c for c in cands if c.model_name in conf.depth.eigenvalue_models]
     # a check no engine of the session can take says why, instead of pytest's "got empty
     # parameter set"
     why = pytest.mark.skip(reason="not applicable: it needs "

@@ -20,7 +20,8 @@ SWEEP_STATES = 200
 #: checks that need capabilities beyond the quantity's own
 NEEDS = {"test_zigzag_torques_and_multipliers": ("mass_matrix", "generalized_forces",
                                                  "constraint_jacobian", "constraint_bias"),
-         "test_trajectory_to_the_meaningful_horizon": ("simulate",)}
+         "test_trajectory_to_the_meaningful_horizon": ("simulate",),
+         "test_eigenvalues_against_the_exact_linearization": ("eigenvalues",)}
 
 angle = st.floats(-np.pi, np.pi)
 state = st.tuples(
@@ -112,3 +113,32 @@ def test_trajectory_to_the_meaningful_horizon(candidate, conformance, tolerances
     assert err["max"].max() <= tol.tolerance, (
         f"{scenario}: max error {err['max'].max():.2e} > {tol.tolerance:g} rad or m, worst "
         f"{worst} at t = {err['t'][k]:.2f} s (horizon {horizon.t:.2f} s: {horizon.reason})")
+
+
+def test_eigenvalues_against_the_exact_linearization(candidate, conformance, tolerances):
+    # (collected for every --model given; without --model, on every model, or at
+    # --conformance-depth quick on the benchmark only and without the critical speeds)
+    """The engine's roll/steer eigenvalues (its ``eigenvalues`` capability) at 11 speeds 0-10
+    m/s and its weave and capsize speeds against the reference's exact linearization
+    (`reference_model.linearize`: complex-step derivatives of its own reduced equations), on
+    the model without drag (no steady upright motion otherwise), within [engine_eigenvalues]
+    and [engine_critical_speeds] of tolerances.toml (`judgments.engine_eigenvalues`)."""
+    from engines import load_engine
+    from engines.linear import critical_speeds as engine_critical
+
+    from comparisons.judgments.eigenvalues import critical_speeds
+    from comparisons.judgments.engine_eigenvalues import judge_eigenvalues
+    model = conformance.model(candidate.model_name)
+    free = model.with_params(model.params.replace(cv=0.0))
+    eng = load_engine(candidate.spec, free, **conformance.options.get(candidate.spec, {}))
+    v = np.linspace(0.0, 10.0, 11)
+    both = conformance.depth.critical_speeds
+    check = judge_eigenvalues(candidate.spec, free.name, v, eng.eigenvalues(v),
+                              free.eigenvalues(v),
+                              engine_critical(eng.eigenvalues, (0.0, 10.0)) if both else (None,) * 2,
+                              critical_speeds(free, np.array([0.0, 10.0])) if both else (None,) * 2,
+                              (0.0, 10.0), tolerances)
+    assert check.eigenvalues_passed, (f"eigenvalues: error {check.error:.2e} > "
+                                      f"{check.tolerance:g} at v = {check.worst_speed:g} m/s")
+    for c in check.critical:
+        assert c.passed, f"{c.mode} speed: engine {c.engine}, reference {c.reference}"

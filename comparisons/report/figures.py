@@ -189,6 +189,51 @@ def eigenvalues(v, re, im, weave, capsize, model):
     return fig
 
 
+def option_study(engine, label, quantity, unit, values, reference_value, v, re, ref_re, critical,
+                 ref_critical, model):
+    """An option study (`comparisons.stages.option_study`): left, the real parts of the four
+    eigenvalues against speed, one curve set per option value (the engine's colour and marker,
+    darker for larger values), the reference's exact ones thin black underneath; right, the
+    weave and capsize speeds against the option value, the reference's marked at its value.
+    ``engine``: the engine's name (its style), ``label`` how the report names it."""
+    from matplotlib.colors import to_rgb
+    plt = _plt()
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(WIDTH, 4.6), gridspec_kw={"width_ratios": (3, 2)})
+    mark = mark_of(engine)
+    base = np.array(to_rgb(mark["color"]))
+    vals = [float(x) for x in values]
+    span = (max(vals) - min(vals)) or 1.0
+    for k in range(ref_re.shape[1]):
+        ax.plot(v, ref_re[:, k], "-", color="k", lw=0.8,
+                label="reference (exact)" if k == 0 else None)
+    for i, x in enumerate(vals):
+        shade = 0.35 + 0.65 * (x - min(vals)) / span     # lighter for small values
+        colour = tuple(1.0 - shade * (1.0 - base))
+        for k in range(np.shape(re)[2]):
+            ax.plot(v, re[i][:, k], ls="--" if x != reference_value else ":", lw=1.2,
+                    color=colour, marker=mark["marker"], ms=3, markevery=(2 * i + k, 10),
+                    label=f"{x:g} {unit}" if k == 0 else None)
+    ax.axhline(0.0, color="0.3", lw=0.6)
+    ax.set_ylim(max(float(np.min(ref_re)), -10.0) - 0.5, float(np.max(ref_re)) + 0.5)
+    ax.set_xlabel("forward speed v [m/s]")
+    ax.set_ylabel("eigenvalue real part [1/s]")
+    ax.set_title(f"{model}: {label}, {quantity}")
+    ax.legend(fontsize=7, loc="lower left")
+    ax.grid(True, lw=0.3)
+    for j, (name, ls) in enumerate((("weave", "--"), ("capsize", ":"))):
+        ys = [np.nan if c[j] is None else c[j] for c in critical]
+        bx.plot(vals, ys, ls=ls, color=mark["color"], marker=mark["marker"], ms=5,
+                label=f"{name} speed ({label})")
+        if ref_critical[j] is not None:
+            bx.plot([reference_value], [ref_critical[j]], "o", mfc="none", color="k", ms=9,
+                    label=f"{name} speed (reference)")
+    bx.set_xlabel(f"{quantity} [{unit}]")
+    bx.set_ylabel("critical speed [m/s]")
+    bx.legend(fontsize=7)
+    bx.grid(True, lw=0.3)
+    return fig
+
+
 def torque_overlay(scenario, runs):
     """Rider torques of every engine overlaid (a torque constant to round-off is drawn as its
     deviation from its mean, on a log scale), and each engine's |difference| to the reference."""
@@ -373,7 +418,7 @@ def refinement(curves, at_time, title):
 
 DRAWINGS: dict[str, Callable] = {f.__name__: f for f in (
     matrix_error, error_vs_time, convergence, lean_panels, error_panels, nonlinear_fits,
-    eigenvalues, torque_overlay, trajectory_overlay, constraint_residuals, stability_study,
+    eigenvalues, option_study, torque_overlay, trajectory_overlay, constraint_residuals, stability_study,
     replay_vs_zigzag, contact_run, refinement)}
 
 

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 from .benchmark import BenchmarkStage
 from .energy import EnergyStage
+from .engine_eigenvalues import EngineEigenvaluesStage
 from .faults import FaultsStage
 from .fixed_step import FixedStepStage
 from .linear_check import LinearCheckStage
+from .option_study import OptionStudyStage
 from .soft_contact import SoftContactStage
 from .stability import StabilityStage
 from .terms import TermsStage
@@ -16,6 +18,7 @@ from .terms import TermsStage
 __all__ = ["SECTIONS", "STAGES"]
 
 STAGES = (StabilityStage(), TermsStage(), FixedStepStage(), EnergyStage(), SoftContactStage(),
-          BenchmarkStage(), LinearCheckStage(), FaultsStage())
+          BenchmarkStage(), LinearCheckStage(), EngineEigenvaluesStage(), OptionStudyStage(),
+          FaultsStage())
 #: the parts of a run besides the scenarios, selectable with --sections (all by default)
 SECTIONS = tuple(dict.fromkeys(s.section for s in STAGES if s.section is not None))

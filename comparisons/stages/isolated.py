@@ -110,6 +110,9 @@ class RemoteEngine(Engine):
     def simulate(self, scenario, **options):
         return self._remote("simulate", scenario, **options)
 
+    def eigenvalues(self, speeds):
+        return self._remote("eigenvalues", speeds)
+
 
 @dataclass(frozen=True)
 class IsolatedSetup(EngineSetup):

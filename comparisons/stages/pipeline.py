@@ -219,6 +219,7 @@ def _stage_tasks(plan: Plan) -> list[Task]:
     out = []
     for stage in STAGES:
         if plan.wants(stage.section):
+            stage.prepare(plan)    # its shared work once, here, before the workers fork
             out += [dataclasses.replace(t, key=(stage.name, t.key)) for t in stage.tasks(plan)]
     return out
 

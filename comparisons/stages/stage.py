@@ -83,6 +83,11 @@ class Stage:
     def tasks(self, plan: Plan) -> list:
         return []
 
+    def prepare(self, plan: Plan) -> None:
+        """Work this stage's tasks share (e.g. an engine's generated code for an option it
+        does not build by default), done once in the main process before the workers fork,
+        only when the stage runs. Default: nothing."""
+
     def assemble(self, plan: Plan, results: dict) -> Assembled:
         return Assembled()
 

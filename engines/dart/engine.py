@@ -26,6 +26,7 @@ from reference_model.model import ForwardResult, torque_array
 
 from ..base import CAPABILITIES, CapabilityError, Engine
 from ..facts import Costs, RunSetup
+from ..linear import DifferenceEigenvalues
 from .contact_study import SOFT_CONTACT
 from .options import DEFAULTS, RunSettings
 from .skeleton import build_skeleton
@@ -48,7 +49,7 @@ def _each(fn, n_vectors: int, *arrays):
                      for i in range(n)])
 
 
-class DartEngine(Engine):
+class DartEngine(DifferenceEigenvalues, Engine):
     """M, inverse dynamics, gravity, forces, rolling constraints and constrained accelerations
     from DART; forward runs on DART's contact (disc-contact models)."""
 

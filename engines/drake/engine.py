@@ -38,6 +38,7 @@ from pydrake.multibody.tree import MultibodyForces
 from ..base import CAPABILITIES, CapabilityError, Engine
 from ..batching import batched
 from ..facts import Costs, RunSetup
+from ..linear import DifferenceEigenvalues
 from .contact_study import SOFT_CONTACT
 from .kinematics import Kinematics
 from .options import DEFAULTS, RunSettings, settings_from
@@ -49,7 +50,7 @@ N_Q, N_C = 8, 5
 TERMS = frozenset(CAPABILITIES) - {"simulate"}
 
 
-class DrakeEngine(Engine):
+class DrakeEngine(DifferenceEigenvalues, Engine):
     """Drake's MultibodyPlant terms, all exact; forward runs on its own contact (disc only).
 
     The terms: mass matrix, inverse dynamics, gravity, bias term and frame kinematics; the runs:

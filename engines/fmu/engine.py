@@ -27,7 +27,7 @@ from reference_model.model import ForwardResult
 from reference_model.parameters.schema import PARAMETER_NAMES
 from reference_model.scenarios import Scenario, run_forward
 
-from ..base import CAPABILITIES, Engine, EngineSpecError, UnsupportedModel
+from ..base import Engine, EngineSpecError, UnsupportedModel
 from ..facts import Costs, RunSetup
 from .cosimulation import co_simulate
 from .linear import roll_steer_eigenvalues
@@ -166,7 +166,7 @@ class FmuEngine(Engine):
         self._linear = self.interface == "me" and len(self._description.derivatives) == 16
         me = self._description.modelExchange
         self.directional = bool(self._linear and me.providesDirectionalDerivative)
-        if self._linear and "eigenvalues" in CAPABILITIES:   # (declared once the harness knows it)
+        if self._linear:
             caps.add("eigenvalues")
         # a Co-Simulation FMU only steps: runs, nothing at a single state
         self.capabilities = frozenset(caps) if self.interface == "me" else frozenset({"simulate"})

@@ -44,6 +44,7 @@ from reference_model.scenarios import Scenario, run_forward
 
 from ..base import CapabilityError, Engine
 from ..facts import Costs, RunSetup
+from ..linear import DifferenceEigenvalues
 from . import codegen
 from .names import MOORE_PARAMETERS
 
@@ -162,12 +163,13 @@ def eliminate(M, F, A, b) -> tuple[np.ndarray, np.ndarray] | None:
     return du, lam
 
 
-class KaneEngine(Engine):
+class KaneEngine(DifferenceEigenvalues, Engine):
     """Moore's Whipple bicycle (sympy KanesMethod, generated numpy code), disc contact only."""
 
     name = "kane"
     capabilities = frozenset({"mass_matrix", "generalized_forces", "constraint_jacobian",
-                              "constraint_bias", "forward_acceleration", "simulate"})
+                              "constraint_bias", "forward_acceleration", "simulate",
+                              "eigenvalues"})
     contacts = ("disc",)
     label = "Kane"
     colour = "tab:purple"

@@ -57,6 +57,7 @@ from reference_model.scenarios import Scenario, run_forward, run_inverse
 from ..base import CAPABILITIES, Engine, EngineError
 from ..batching import batched
 from ..facts import Costs, RunSetup
+from ..linear import DifferenceEigenvalues
 
 try:
     import pinocchio as pin
@@ -173,7 +174,7 @@ for _s in _STATUS:
     _s.setflags(write=False)
 
 
-class PinocchioEngine(Engine):
+class PinocchioEngine(DifferenceEigenvalues, Engine):
     """Mass matrix, RNEA, gravity, rolling constraints, forces and forward runs from Pinocchio."""
 
     name = "pinocchio"

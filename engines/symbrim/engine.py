@@ -22,7 +22,9 @@ whose crown is a circle of that radius (its contact point is the torus's lowest 
 the major radius ``R_front - crown_radius`` so that the hub stands at R_front when upright, as
 the reference's. With 0 it is the disc exactly (the same generated equations' toroidal
 variant, checked against the reference); with > 0 it is another bicycle, a model difference
-(the front contact moves sideways with lean), not an error of either.
+(the front contact moves sideways with lean), not an error of either: declared as the option
+study ``CROWN_STUDY`` (its eigenvalues, by `engines.linear` from this engine's own toroidal
+contact, and critical speeds against the crown radius, in the report).
 """
 
 from __future__ import annotations
@@ -34,13 +36,31 @@ import numpy as np
 from reference_model import Model
 
 from ..base import CapabilityError, Engine, EngineSpecError
-from ..facts import Costs, RunSetup
+from ..facts import Costs, OptionStudy, RunSetup
 from ..kane.engine import KaneEngine
 from ..kane.names import MOORE_PARAMETERS
 from . import codegen
 from .parameters import moore_parameters, parameter_route
 
-__all__ = ["SymbrimEngine", "symbrim_parameters"]
+__all__ = ["CROWN_STUDY", "SymbrimEngine", "symbrim_parameters"]
+
+def _prepare_torus() -> None:
+    """The toroidal variant's generated code (a second derivation: ~15-65 s cold, cached)."""
+    codegen.load(front_crown=True)
+
+
+#: the declared model difference of ``crown_radius`` > 0, and the values it is studied at
+CROWN_STUDY = OptionStudy(
+    option="crown_radius", quantity="front tyre crown radius", unit="m",
+    values=(0.0, 0.005, 0.01, 0.02, 0.03), reference_value=0.0,
+    difference="a toroidal front tyre (SymBRiM's ToroidalWheel, crown of this radius, major "
+               "radius R_front - crown): its contact point moves sideways as the wheel leans, "
+               "where the reference's knife-edge disc touches at the wheel plane's lowest point",
+    why="0 is the reference's knife edge; 5-30 mm spans the cross-section radii of real tyres "
+        "(half the width of a 10-60 mm tyre: track and road tyres about 10-15 mm, city and "
+        "mountain-bike tyres 20-30 mm); 30 mm is under a tenth of the benchmark's R_front "
+        "(0.35 m), where the torus stays a tyre",
+    prepare=_prepare_torus)
 
 
 def symbrim_parameters(params, crown_radius: float = 0.0) -> np.ndarray:
@@ -84,6 +104,7 @@ class SymbrimEngine(KaneEngine):
     # expressions print smaller), so 0.6 x Kane's declared 0.3 s; the cold derivation (35-50 s)
     # is `prepare`'s, once per machine, and a cached load ~0.1 s (2.3 s with the machine loaded)
     costs = Costs(run_per_second=0.2, short_run=0.8, terms=1.5, faults=2.0)
+    option_studies = (CROWN_STUDY,)
 
     @classmethod
     def prepare(cls) -> None:
