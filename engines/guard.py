@@ -91,15 +91,20 @@ def _kind(value) -> str:
     return f"a {type(value).__name__}"
 
 
-def _array(value, what: str) -> np.ndarray:
-    """``value`` as a real float array, or `EngineCallError` saying why it is not one."""
+def _any_array(value, what: str) -> np.ndarray:
+    """``value`` as a numpy array of any dtype, or `EngineCallError` saying why it is none."""
     if value is None or isinstance(value, (str, bytes)):
         raise EngineCallError(f"{what} returned {_kind(value)}, not an array")
     try:
-        arr = np.asarray(value)
+        return np.asarray(value)
     except Exception as exc:   # noqa: BLE001 - ragged lists, objects that refuse
         raise EngineCallError(f"{what} returned {_kind(value)} that is not an array "
                               f"({type(exc).__name__}: {cut(exc, 80)})") from None
+
+
+def _array(value, what: str) -> np.ndarray:
+    """``value`` as a real float array, or `EngineCallError` saying why it is not one."""
+    arr = _any_array(value, what)
     if arr.dtype.kind == "c":
         raise EngineCallError(f"{what} returned complex values (dtype {arr.dtype}); refused, "
                               "its imaginary part would be dropped: return real floats")
@@ -134,13 +139,7 @@ def check_term(name: str, value, q, what: str | None = None) -> np.ndarray:
 def check_eigenvalues(value, speeds, what: str = "eigenvalues") -> np.ndarray:
     """``value``, returned by ``eigenvalues(speeds)``, as a complex (n, 4) array for the n
     speeds asked about; `EngineCallError` otherwise (None, text, the wrong shape, NaN)."""
-    if value is None or isinstance(value, (str, bytes)):
-        raise EngineCallError(f"{what} returned {_kind(value)}, not an array")
-    try:
-        arr = np.asarray(value)
-    except Exception as exc:   # noqa: BLE001 - ragged lists, objects that refuse
-        raise EngineCallError(f"{what} returned {_kind(value)} that is not an array "
-                              f"({type(exc).__name__}: {cut(exc, 80)})") from None
+    arr = _any_array(value, what)
     if arr.dtype.kind not in "iufc":
         raise EngineCallError(f"{what} returned {_kind(value)} of dtype {arr.dtype}, not numbers")
     want = (np.atleast_1d(np.asarray(speeds, dtype=float)).size, 4)
