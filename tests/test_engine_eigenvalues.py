@@ -248,3 +248,31 @@ def test_an_option_studys_shared_work_is_prepared_once_when_it_runs():
         OptionStudyStage().prepare(plan)
         assert calls == expected
         assert len(OptionStudyStage().tasks(plan)) == (0 if quick else 2)
+
+
+def test_the_pipeline_prepares_each_stage_it_runs_before_making_its_tasks(monkeypatch):
+    """`pipeline._stage_tasks` (run's main process, before the workers fork) calls each wanted
+    stage's ``prepare`` once, before that stage's ``tasks``; a stage whose section is not
+    wanted is neither prepared nor asked for tasks. Planted (the prepare call dropped from the
+    pipeline): the calls list lacks it."""
+    import dataclasses as dc
+
+    from comparisons.stages import pipeline
+    calls = []
+
+    class Probe:
+        def __init__(self, name, section):
+            self.name, self.section = name, section
+
+        def prepare(self, plan):
+            calls.append(("prepare", self.name))
+
+        def tasks(self, plan):
+            calls.append(("tasks", self.name))
+            return []
+
+    monkeypatch.setattr(pipeline, "STAGES", (Probe("a", "eigenvalues"), Probe("b", "faults")))
+    plan = _plan(())
+    plan = type(plan)(dc.replace(plan.opts, sections=("eigenvalues",)), (), plan.facts)
+    assert pipeline._stage_tasks(plan) == []
+    assert calls == [("prepare", "a"), ("tasks", "a")]
