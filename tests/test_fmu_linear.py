@@ -31,7 +31,7 @@ from reference_model.solvers import consistent_state   # noqa: E402
 SPEC = "engines.fmu:FmuEngine"
 #: away from the benchmark's double roots (0.68 m/s, where weave turns oscillatory), through
 #: the weave (4.29 m/s) and capsize (6.02 m/s) speeds
-SPEEDS = np.array([0.3, 1.0, 2.5, 4.0, 4.3, 5.0, 6.0, 8.0, 10.0])
+SPEEDS = np.array([0.0, 0.3, 1.0, 2.5, 4.0, 4.3, 5.0, 6.0, 8.0, 10.0])
 
 
 def _without_drag(name):

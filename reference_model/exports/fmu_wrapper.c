@@ -27,7 +27,18 @@ typedef double _Complex cplx;
 #define MK(re, im) ((re) + (im) * I)
 static cplx c_sin(cplx a) { return MK(sin(creal(a)), cos(creal(a)) * cimag(a)); }
 static cplx c_cos(cplx a) { return MK(cos(creal(a)), -sin(creal(a)) * cimag(a)); }
-static cplx c_sqrt(cplx a) { double s = sqrt(creal(a)); return MK(s, 0.5 * cimag(a) / s); }
+/* sqrt at a zero argument has no derivative; the generated code takes it of two things: the
+ * norms of the disc contact's in-plane directions (never zero on a bicycle that stands) and the
+ * drag's speed |v_G3|, which is zero at rest and always multiplies v_G3 itself: the drag
+ * cv |v| v is quadratic there, its derivative 0, and a zero imaginary part gives exactly that.
+ * At rest the seeded square v.v is -h^2 |dv|^2 + 2 i h v.dv (the complex step's second-order
+ * real part, ~1e-40): taken as 0, not as a negative number, whose sqrt would be NaN, as 1/s
+ * would be infinite (both seen at v = 0, the standstill the eigenvalues start from). */
+static cplx c_sqrt(cplx a)
+{
+    double x = creal(a), s = x > 0.0 ? sqrt(x) : 0.0;
+    return MK(s, s > 0.0 ? 0.5 * cimag(a) / s : 0.0);
+}
 static cplx c_pow(cplx a, cplx b)
 {
     double x = creal(a), e = creal(b), r = pow(x, e);
