@@ -99,11 +99,11 @@ class SymbrimEngine(KaneEngine):
                                     "code, dependent speeds eliminated per state) in the "
                                     "reference's solvers (same integrator and tolerances); disc "
                                     "front contact only; no inverse dynamics"),)
-    # measured side by side with Kane's at a load of ~4: stability-psid5 2.5 s per simulated
-    # second against Kane's 4.0 (one state's forward 0.64 ms against 1.19 ms: SymBRiM's
-    # expressions print smaller), so 0.6 x Kane's declared 0.3 s; the cold derivation (35-50 s)
-    # is `prepare`'s, once per machine, and a cached load ~0.1 s (2.3 s with the machine loaded)
-    costs = Costs(run_per_second=0.2, short_run=0.8, terms=1.5, faults=2.0)
+    # measured on the quiet 2-core host (2026-12-02, `bicycle-xval run`): the energy drift's
+    # free roll 1.3 s on SymBRiM and 1.3 s on Kane, so Kane's rate (1.4) rather than the 0.2
+    # it had, which started that stage last and left one worker idle at the end; the cold
+    # derivation (35-50 s) is `prepare`'s, once per machine, and a cached load ~0.1 s
+    costs = Costs(run_per_second=1.4, short_run=0.8, terms=1.5, faults=2.0)
     option_studies = (CROWN_STUDY,)
 
     @classmethod
