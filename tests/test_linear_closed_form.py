@@ -219,3 +219,48 @@ def test_max_matched_error_matches_each_eigenvalue_once_relative_above_one():
     # 1.2 cannot reuse 1.1 (taken by 1.0): it gets 5.0, 3.8 / 1.2
     assert max_matched_error(np.array([1.0, 1.2]), np.array([1.1, 5.0])) == \
         pytest.approx(3.8 / 1.2, rel=1e-12)
+    # eigenvalues come in +- pairs: -1 takes -1.05 (0.05), not the 1.1 nearest to -(-1)
+    assert max_matched_error(np.array([-1.0, 1.0]), np.array([1.1, -1.05])) == \
+        pytest.approx(0.1, rel=1e-12)
+
+
+def test_the_root_bracketing_on_functions_with_known_roots():
+    """The critical speeds' root finder on straight lines, whose roots are known exactly, on a
+    grid of binary fractions (1/8 m/s) so a root can fall exactly on a grid point: that point is
+    the root, in either direction of the crossing (steep enough, 8 (0.5 - s), that the sample
+    before is exactly 1); a rising crossing is none when only falling ones count; a root in the
+    last interval is bracketed by the grid's ends; 1e-14 is brentq's xtol."""
+    from comparisons.judgments.meijaard import _first_root, _grid
+    grid = _grid(0.0, 1.0, 0.125)
+    np.testing.assert_array_equal(grid, np.arange(9) * 0.125)
+    np.testing.assert_array_equal(_grid(0.0, 0.005, 0.01), [0.0, 0.005])   # one step at least
+    np.testing.assert_array_equal(_grid(2.0, 3.0, 0.5), [2.0, 2.5, 3.0])
+
+    def falling(s):
+        return 8.0 * (0.5 - np.asarray(s, dtype=float).reshape(-1))
+
+    def rising(s):
+        return np.asarray(s, dtype=float).reshape(-1) - 0.3
+
+    def late(s):
+        return np.asarray(s, dtype=float).reshape(-1) - 0.95
+
+    assert _first_root(falling, grid, down_only=True) == 0.5
+    assert _first_root(falling, grid, down_only=False) == 0.5
+    assert _first_root(rising, grid, down_only=True) is None
+    assert _first_root(rising, grid, down_only=False) == pytest.approx(0.3, abs=1e-14)
+    assert _first_root(late, grid, down_only=False) == pytest.approx(0.95, abs=1e-14)
+
+
+def test_the_closed_forms_matrices_are_read_only_and_a_scalar_speed_gives_one_state_matrix():
+    from comparisons.judgments.meijaard import state_matrix
+    from reference_model.benchmark import TABLE1
+    cf = closed_form(TABLE1.as_dict())
+    for key in MATRICES:
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(cf, key)[0, 0] = 1.0
+    A = state_matrix(cf, V)
+    assert A.shape == (4, 4)
+    # d/dt [q, q'] = [q', ...]: the upper half is [0 I]
+    np.testing.assert_array_equal(A[:2], [[0, 0, 1, 0], [0, 0, 0, 1]])
+    assert state_matrix(cf, [V, 2 * V]).shape == (2, 4, 4)
