@@ -264,3 +264,27 @@ def test_the_closed_forms_matrices_are_read_only_and_a_scalar_speed_gives_one_st
     # d/dt [q, q'] = [q', ...]: the upper half is [0 I]
     np.testing.assert_array_equal(A[:2], [[0, 0, 1, 0], [0, 0, 0, 1]])
     assert state_matrix(cf, [V, 2 * V]).shape == (2, 4, 4)
+
+
+def test_the_capsize_speed_is_the_root_of_det_K_above_the_weave_speed_only():
+    """The product of the four eigenvalues is det K(v) / det M, and K = g K0 + v^2 K2 with K2's
+    first column zero makes det K linear in v^2: one root, v^2 = -g det K0 / (K0_11 K2_22 -
+    K0_21 K2_12), worked here from the matrices. On the benchmark it is the capsize speed
+    (above the weave speed); with the steer axis tilt halved (lam = pi/20) it lies
+    below that bicycle's weave speed (5.38 < 6.40 m/s), where there is no capsize to find: the
+    search starts at the weave speed, so none. 1e-9 m/s: brentq to 1e-14 on both."""
+    from comparisons.judgments.meijaard import closed_form_critical_speeds
+    from reference_model.benchmark import TABLE1
+
+    def det_k_root(cf):
+        K0, K2 = cf.K0, cf.K2
+        return math.sqrt(-cf.g * np.linalg.det(K0)
+                         / (K0[0, 0] * K2[1, 1] - K0[1, 0] * K2[0, 1]))
+
+    b = TABLE1.as_dict()
+    cf = closed_form(b)
+    weave, capsize = closed_form_critical_speeds(cf)
+    assert weave < capsize == pytest.approx(det_k_root(cf), abs=TOL_SPEED)
+    steep = closed_form({**b, "lam": b["lam"] / 2})
+    weave, capsize = closed_form_critical_speeds(steep)
+    assert det_k_root(steep) < weave and capsize is None
