@@ -288,3 +288,28 @@ def test_the_capsize_speed_is_the_root_of_det_K_above_the_weave_speed_only():
     steep = closed_form({**b, "lam": b["lam"] / 2})
     weave, capsize = closed_form_critical_speeds(steep)
     assert det_k_root(steep) < weave and capsize is None
+
+
+def test_the_linear_checks_fields_on_a_narrow_range_and_a_bicycle_without_counterpart():
+    """The judgment itself (the stage's rows are above): on the benchmark over 0..5 m/s the
+    weave speed (4.29) is in range and the capsize speed (6.02) is not, so neither side finds
+    one and that agrees; the drag-free benchmark needs no note. The thesis bicycle (thesis
+    contact, drag) has no counterpart, said with its model, its range and the drag note. A
+    matrix's error is the largest difference over its scale (max |entry| here: 0.5 / 10) at
+    the entry where it is largest."""
+    from comparisons.judgments.linear_check import _matrix_check, linear_benchmark_check
+    from comparisons.judgments.tolerances import Tolerance
+    check = linear_benchmark_check(load_model("benchmark"), TOLS, speeds=(0.0, 5.0))
+    assert (check.reason, check.note, check.speeds_range) == ("", "", (0.0, 5.0))
+    weave, capsize = check.speeds
+    assert weave.closed_form == pytest.approx(4.29238253634111, abs=TOL_SPEED)
+    assert (capsize.closed_form, capsize.linearization, capsize.passed) == (None, None, True)
+    assert check.passed
+    other = linear_benchmark_check(load_model("thesis"), TOLS)
+    assert other.model == "thesis" and other.speeds_range == (0.0, 10.0)
+    assert other.reason.startswith("no benchmark counterpart: model.contact")
+    assert other.note.startswith("thesis has drag (cv = ") and other.passed is None
+    expected = np.array([[10.0, -2.0], [3.0, 4.0]])
+    got = expected + np.array([[0.0, 0.1], [-0.5, 0.0]])
+    m = _matrix_check("K0", got, expected, Tolerance("x", 1e-3, "max_abs", "by hand"))
+    assert (m.error, m.worst, m.passed) == (pytest.approx(0.05, rel=1e-12), "K0[delta, phi]", False)
