@@ -67,6 +67,30 @@ def test_a_user_file_must_have_every_packaged_table(tmp_path):
     assert load_complete(TOLERANCES_FILE) == load_tolerances()
 
 
+def test_the_missing_tables_are_counted_and_a_single_one_named_alone(tmp_path):
+    """The count after the first missing table is the packaged file's tables (read here with
+    tomllib) less the one the file has and the one named; a file lacking only one table names
+    it without '(and ...)'."""
+    import tomllib
+    tables = list(tomllib.loads(TOLERANCES_FILE.read_text()))
+    path = tmp_path / "few.toml"
+    path.write_text("[mass_matrix]\n" + GOOD)
+    with pytest.raises(ToleranceError, match=rf"lacks \[{tables[1]}\] \(and {len(tables) - 2} "
+                                             r"more\); start from a copy of"):
+        load_complete(path)
+    almost = tmp_path / "almost.toml"
+    almost.write_text("".join(f"[{name}]\n" + GOOD for name in tables[:-1]))
+    with pytest.raises(ToleranceError, match=rf"{almost} lacks \[{tables[-1]}\]; start from"):
+        load_complete(almost)
+
+
+def test_tolerances_equal_a_mapping_only_with_the_same_tables():
+    tols = load_tolerances()
+    assert tols == dict(tols)
+    assert tols != {} and tols != {**dict(tols), "mass_matrix": None}
+    assert tols != [("mass_matrix", tols["mass_matrix"])]
+
+
 ENTRY = "[x]\n" + GOOD
 
 
