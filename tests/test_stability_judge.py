@@ -69,3 +69,29 @@ def test_the_judge_predicts_the_closed_form_mode_and_the_run_confirms_it(bench, 
     # ~10 % of the linear rate (0.558 against 0.612 /s below the weave speed, the worst)
     assert j["passed"] and np.sign(j["measured"]) == SIGN[(mode, factor)], j
     assert j["measured"] == pytest.approx(expected.real, rel=0.15), j
+    # how it was measured, and on which run
+    how = ("peaks of |dtheta/dt| from 1 s, envelope rate " if mode == "weave"
+           else "capsize eigenvalue from the run (matrix pencil) ")
+    assert how in j["how"] and j["how"].endswith("; completed at 5.00 s"), j
+    # the right sign on a run that did not complete is not a pass
+    import dataclasses
+    fell = judge_run(model, mode, speed, dataclasses.replace(run, status="fell"))
+    assert not fell["passed"] and fell["measured"] == j["measured"]
+
+
+def test_the_stability_model_drops_only_drag_and_the_scenario_is_the_models():
+    """cv = 0 (no steady upright motion with drag), said in a note only when there was drag;
+    the run's scenario: the model's spec, upright, the roll-rate kick, the wheel rate for the
+    speed (v / R_rear), the model-stability tag."""
+    from comparisons.stages.stability import ROLL_RATE
+    model, note = stability_model("benchmark")
+    assert note == "" and model.params.cv == 0.0
+    dragged, note = stability_model("thesis-disc")
+    assert dragged.params.cv == 0.0 and dragged.params.R_rear > 0
+    assert note.startswith("thesis-disc has drag (cv = ") and note.endswith(
+        "linearized and run with cv = 0")
+    sc = scenario("thesis-disc", 4.6)
+    assert (sc.model, sc.kind, sc.tags) == ("thesis-disc", "forward", ("model-stability",))
+    assert sc.dq_ind0 == (ROLL_RATE, 4.6 / dragged.params.R_rear, 0.0)
+    assert sc.name.startswith("stability-v4.6") and "4.6000 m/s" in sc.description
+    assert scenario("thesis-disc", 5.0).name != sc.name
