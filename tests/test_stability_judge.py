@@ -50,15 +50,26 @@ def _followed(cf, mode: str, v_crit: float, factor: float, steps: int = 400) -> 
     return z
 
 
+@pytest.fixture(scope="module")
+def runs(bench):
+    """The reference's run at each (mode, factor), made once for the judge's and the
+    section's tests."""
+    from engines import load_engine
+    model, _, crit = bench
+    engine = load_engine("reference", model)
+    return {(mode, f): engine.simulate(scenario("benchmark", f * crit[mode]))
+            for mode in ("weave", "capsize") for f in FACTORS}
+
+
 @pytest.mark.parametrize("mode", ["weave", "capsize"])
 @pytest.mark.parametrize("factor", FACTORS)
-def test_the_judge_predicts_the_closed_form_mode_and_the_run_confirms_it(bench, mode, factor):
+def test_the_judge_predicts_the_closed_form_mode_and_the_run_confirms_it(bench, runs, mode,
+                                                                         factor):
     model, cf, crit = bench
     speed = factor * crit[mode]
     expected = _followed(cf, mode, crit[mode], factor)
     assert np.sign(expected.real) == SIGN[(mode, factor)]     # the definitions of the speeds
-    from engines import load_engine
-    run = load_engine("reference", model).simulate(scenario("benchmark", speed))
+    run = runs[(mode, factor)]
     j = judge_run(model, mode, speed, run)
     # the model's exact linearization and the paper's closed form agree to ~1e-12 relative
     # (tests/test_linear_closed_form.py); 1e-8 /s leaves room and is far below the 0.07 /s
@@ -95,3 +106,59 @@ def test_the_stability_model_drops_only_drag_and_the_scenario_is_the_models():
     assert sc.dq_ind0 == (ROLL_RATE, 4.6 / dragged.params.R_rear, 0.0)
     assert sc.name.startswith("stability-v4.6") and "4.6000 m/s" in sc.description
     assert scenario("thesis-disc", 5.0).name != sc.name
+
+
+def test_the_section_judges_each_run_and_says_what_was_not_run(bench, runs):
+    """The section of the benchmark from the four runs above, a soft-contact label whose runs
+    are a declared difference (reported, never judged), one that could not represent the
+    bicycle (a reason, not run) and one whose runs failed (FAIL): the critical speeds are the
+    closed form's (6 decimals), each row is its run's judge_run in the table and in the
+    comparisons, in the labels' order; without a critical speed, no runs."""
+    import dataclasses
+    from comparisons.stages.cases import model_spec
+    from comparisons.stages.results import Table, Text
+    from comparisons.stages.stability import run_speeds, stability_section
+    model, _, crit = bench
+    m = model_spec("benchmark")
+    speeds = run_speeds(crit)
+    assert [(mode, f) for mode, f, _ in speeds] == [(mode, f) for mode in ("weave", "capsize")
+                                                    for f in FACTORS]
+    got, errors = {}, {}
+    for mode, f, v in speeds:
+        got[(mode, v, "reference")] = runs[(mode, f)]
+        got[(mode, v, "soft")] = dataclasses.replace(runs[(mode, f)], status="fell")
+        got[(mode, v, "rigid-less")] = "cannot represent it"
+        errors[(mode, v, "broken")] = "boom"
+    labels = ("reference", "soft", "rigid-less", "broken")
+    sec = stability_section(m, crit, None, got, errors, labels, {"soft": "soft contact"})
+    assert sec.title.startswith("Stability of benchmark")
+    text = " ".join(b.text for b in sec.blocks if isinstance(b, Text))
+    assert (f"Critical speeds: weave {crit['weave']:.6f} m/s, capsize {crit['capsize']:.6f} m/s"
+            in text) and "contact disc, cv = 0." in text
+    assert "soft: a declared model difference (soft contact)" in text
+    (table,) = [b for b in sec.blocks if isinstance(b, Table)]
+    assert len(table.rows) == 4 * len(labels)
+    for i, (mode, f, v) in enumerate(speeds):
+        j = judge_run(model, mode, v, runs[(mode, f)])
+        ref, soft, less, broken = table.rows[4 * i: 4 * i + 4]
+        assert ref == (mode, f"{f:g} x = {v:.4f}", "reference", f"{j['predicted']:+.4f}",
+                       f"{j['measured']:+.4f}", f"{mode} {j['expected']}", "pass", j["how"])
+        assert soft[2] == "soft" and soft[6] == "reported: differs"   # it fell: not a pass
+        assert less[2:] == ("rigid-less", "-", "-", "-", "not run", "cannot represent it")
+        assert broken[2:] == ("broken", "-", "-", "-", "FAIL", "boom")
+    rows = {(c["engines"][0], c["scenario"]): c for c in sec.comparisons}
+    assert len(rows) == 4 * len(labels)
+    for mode, f, v in speeds:
+        where = f"benchmark at {v:.4f} m/s ({f:g} x {mode} speed)"
+        ref = rows[("reference", where)]
+        assert ref["passed"] is True and ref["predicted"] == judge_run(
+            model, mode, v, runs[(mode, f)])["expected"]
+        assert rows[("soft", where)]["passed"] is None
+        assert rows[("soft", where)]["declared_difference"] == "soft contact"
+        assert rows[("rigid-less", where)]["passed"] is None
+        assert rows[("broken", f"benchmark at {v:.4f} m/s")]["passed"] is False
+    (panels,) = [b for b in sec.figures if b.kind == "lean_panels"]
+    assert [sorted(p["lines"]) for p in panels.data["panels"]] == [["reference", "soft"]] * 4
+    none = stability_section(m, {}, None, {}, {})
+    assert "none in 0-10 m/s" in none.blocks[0].text and not none.comparisons
+    assert none.blocks[-1].text == "No critical speed in the range: no runs."
