@@ -146,19 +146,52 @@ def test_the_section_judges_each_run_and_says_what_was_not_run(bench, runs):
         assert soft[2] == "soft" and soft[6] == "reported: differs"   # it fell: not a pass
         assert less[2:] == ("rigid-less", "-", "-", "-", "not run", "cannot represent it")
         assert broken[2:] == ("broken", "-", "-", "-", "FAIL", "boom")
-    rows = {(c["engines"][0], c["scenario"]): c for c in sec.comparisons}
+    assert table.header == ("mode", "speed [m/s]", "engine", "linear real part [1/s]",
+                            "measured [1/s]", "predicted", "verdict", "how")
+    # summary.json's comparisons (docs/report.md): the common fields and each kind's extras
+    rows = {(c["engines"][0], c["scenario"]): c.as_dict() for c in sec.comparisons}
     assert len(rows) == 4 * len(labels)
     for mode, f, v in speeds:
         where = f"benchmark at {v:.4f} m/s ({f:g} x {mode} speed)"
-        ref = rows[("reference", where)]
-        assert ref["passed"] is True and ref["predicted"] == judge_run(
-            model, mode, v, runs[(mode, f)])["expected"]
-        assert rows[("soft", where)]["passed"] is None
-        assert rows[("soft", where)]["declared_difference"] == "soft contact"
-        assert rows[("rigid-less", where)]["passed"] is None
-        assert rows[("broken", f"benchmark at {v:.4f} m/s")]["passed"] is False
+        j = judge_run(model, mode, v, runs[(mode, f)])
+        judged = {"quantity": f"stability: {mode} {j['expected']} (sign of its real part)",
+                  "scenario": where, "model": "benchmark", "max_error": None, "tolerance": None,
+                  "localized_to": f"measured {j['measured']:+.4f} /s",
+                  "measured": j["measured"], "predicted": j["expected"], "linear": j["predicted"]}
+        assert rows[("reference", where)] == {**judged, "engines": ["reference"], "passed": True,
+                                              "note": j["how"]}
+        soft = judge_run(model, mode, v, got[(mode, v, "soft")])
+        assert rows[("soft", where)] == {
+            **judged, "engines": ["soft"], "passed": None,
+            "note": f"{soft['how']}; reported, not judged: a declared model difference "
+                    "(soft contact)",
+            "declared_difference": "soft contact", "agrees": False,
+            "why": "declared model difference"}
+        unjudged = {"quantity": f"stability: {mode} run", "model": "benchmark",
+                    "max_error": None, "tolerance": None}
+        assert rows[("rigid-less", where)] == {
+            **unjudged, "scenario": where, "engines": ["rigid-less"], "passed": None,
+            "localized_to": "-", "note": "cannot represent it"}
+        assert rows[("broken", f"benchmark at {v:.4f} m/s")] == {
+            **unjudged, "scenario": f"benchmark at {v:.4f} m/s", "engines": ["broken"],
+            "passed": False, "localized_to": "boom", "note": ""}
     (panels,) = [b for b in sec.figures if b.kind == "lean_panels"]
-    assert [sorted(p["lines"]) for p in panels.data["panels"]] == [["reference", "soft"]] * 4
+    assert panels.name == "stability_runs_benchmark.png"
+    assert panels.data["ylabel"] == "theta (lean) [rad]"
+    assert [p["title"] for p in panels.data["panels"]] == [
+        f"benchmark: {f:g} x {mode} speed = {v:.4f} m/s" for mode, f, v in speeds]
+    for (mode, f, v), p in zip(speeds, panels.data["panels"]):
+        assert sorted(p["lines"]) == ["reference", "soft"]
+        t, theta = p["lines"]["reference"]
+        np.testing.assert_array_equal(theta, runs[(mode, f)].q[:, 3])   # theta, the lean
+    curves = {"speeds": np.arange(3.0)}
+    drawn = stability_section(m, crit, curves, got, errors, labels, {"soft": "soft contact"})
+    (eig,) = [b for b in drawn.figures if b.kind == "eigenvalues"]
+    assert eig.name == "eigenvalues_benchmark.png" and eig.data == curves
+    # the labels default to the runs' own order
+    default = stability_section(m, crit, None, got, errors,
+                                differences={"soft": "soft contact"})
+    assert [b for b in default.blocks if isinstance(b, Table)] == [table]
     none = stability_section(m, {}, None, {}, {})
     assert "none in 0-10 m/s" in none.blocks[0].text and not none.comparisons
     assert none.blocks[-1].text == "No critical speed in the range: no runs."
