@@ -195,3 +195,35 @@ def test_the_section_judges_each_run_and_says_what_was_not_run(bench, runs):
     none = stability_section(m, {}, None, {}, {})
     assert "none in 0-10 m/s" in none.blocks[0].text and not none.comparisons
     assert none.blocks[-1].text == "No critical speed in the range: no runs."
+
+
+def test_the_stage_asks_for_the_curves_and_one_run_per_speed_and_setup(bench):
+    """Its tasks for a model with critical speeds (a model without is skipped, and the next is
+    still planned): the eigenvalue curves, then each run (stability_run of the model, the setup
+    and the speed) named for its model, factor, mode and engine, and tagged with the engine
+    whose code it runs (None for the reference's own)."""
+    from types import SimpleNamespace
+
+    from comparisons.stages.cases import model_spec
+    from comparisons.stages.runs import setups_for
+    from comparisons.stages.stability import (StabilityStage, run_speeds, stability_curves,
+                                              stability_run)
+    from comparisons.stages.stage import Plan
+    from engines.facts import engine_facts
+    _, _, crit = bench
+    setups = tuple(setups_for(("reference", "pinocchio"), {}))
+    m = model_spec("benchmark")
+    plan = Plan(opts=SimpleNamespace(models=(model_spec("thesis-disc"), m), quick=False),
+                setups=setups, facts={s.engine: engine_facts(s.engine) for s in setups},
+                critical={m.spec: crit})
+    curves, *runs = StabilityStage().tasks(plan)
+    assert (curves.key, curves.func, curves.args, curves.label, curves.engine) == \
+        (("curves", "benchmark"), stability_curves, ("benchmark",),
+         "benchmark: eigenvalues against speed", None)
+    want = [(("run", "benchmark", mode, v, s.label), ("benchmark", s, v),
+             f"benchmark: {f:g} x {mode} speed on {s.label}",
+             None if s.engine == "reference" else s.engine)
+            for mode, f, v in run_speeds(crit) for s in setups]
+    assert [(t.key, t.args, t.label, t.engine) for t in runs] == want
+    assert all(t.func is stability_run for t in runs)
+    assert [t.engine for t in runs[:2]] == [None, "pinocchio"]
