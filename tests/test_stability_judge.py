@@ -104,6 +104,8 @@ def test_the_stability_model_drops_only_drag_and_the_scenario_is_the_models():
     sc = scenario("thesis-disc", 4.6)
     assert (sc.model, sc.kind, sc.tags) == ("thesis-disc", "forward", ("model-stability",))
     assert sc.dq_ind0 == (ROLL_RATE, 4.6 / dragged.params.R_rear, 0.0)
+    assert sc.q0 == (0,) * 8 and sc.torques == (0.0, 0.0, 0.0)    # upright, no torques
+    assert sc.constraints == "projection"
     assert sc.name.startswith("stability-v4.6") and "4.6000 m/s" in sc.description
     assert scenario("thesis-disc", 5.0).name != sc.name
 
