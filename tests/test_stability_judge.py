@@ -194,6 +194,20 @@ def test_the_section_judges_each_run_and_says_what_was_not_run(bench, runs):
     default = stability_section(m, crit, None, got, errors,
                                 differences={"soft": "soft contact"})
     assert [b for b in default.blocks if isinstance(b, Table)] == [table]
+    # the other verdicts: a judged run that did not complete FAILs, a reported one that
+    # agrees says so, and a label that cannot run, first in the order, stops nothing after it
+    swapped = {**got, **{(mode, v, "reference"): got[(mode, v, "soft")] for mode, _, v in speeds},
+               **{(mode, v, "soft"): got[(mode, v, "reference")] for mode, _, v in speeds}}
+    other = stability_section(m, crit, None, swapped, {}, ("rigid-less", "reference", "soft"),
+                              {"soft": "soft contact"})
+    (t2,) = [b for b in other.blocks if isinstance(b, Table)]
+    assert [(r[2], r[6]) for r in t2.rows] == [("rigid-less", "not run"), ("reference", "FAIL"),
+                                               ("soft", "reported: agrees")] * 4
+    # a bicycle with drag: the note says it was removed; no declared difference, no sentence
+    dragged = stability_section(model_spec("thesis-disc"), {"weave": 4.0}, None, {}, {})
+    prose = " ".join(b.text for b in dragged.blocks if isinstance(b, Text))
+    assert "eigenvalues against speed 0-10 m/s. thesis-disc has drag (cv = " in prose
+    assert "declared model difference" not in prose and prose.endswith("matrix pencil).")
     none = stability_section(m, {}, None, {}, {})
     assert "none in 0-10 m/s" in none.blocks[0].text and not none.comparisons
     assert none.blocks[-1].text == "No critical speed in the range: no runs."
