@@ -242,4 +242,9 @@ def test_the_stage_asks_for_the_curves_and_one_run_per_speed_and_setup(bench):
             for mode, f, v in run_speeds(crit) for s in setups]
     assert [(t.key, t.args, t.label, t.engine) for t in runs] == want
     assert all(t.func is stability_run for t in runs)
+    # a run's expected time (its pool budget: 20 x it, at least 60 s) is 5 s of simulated time
+    # at its engine's declared cost per simulated second; the curves' is some positive time
+    assert [t.cost for t in runs] == [5.0 * plan.facts[s.engine].costs.run_per_second
+                                      for _ in run_speeds(crit) for s in setups]
+    assert curves.cost > 0
     assert [t.engine for t in runs[:2]] == [None, "pinocchio"]
