@@ -420,6 +420,17 @@ def test_replay_with_nothing_to_compare_is_not_assessed(status, samples):
     assert "within" not in v.evidence and "sample" in v.evidence
 
 
+def test_a_replay_that_fell_after_one_step_is_judged_on_that_step():
+    """Two samples: the initial state and one past it, in common with the zig-zag, so there is
+    something to compare; it followed the zig-zag for 0.01 s and fell (< the 1 s of 'partly'):
+    'not reproduced', not 'not assessed'."""
+    r = run("replay", status="fell", t_end=6.28, q=_zigzag)
+    r.t, r.q, r.dq = r.t[:2], r.q[:2], r.dq[:2]
+    v = judge("replay-identical", [ZIGZAG, r])
+    assert v.verdict == "not reproduced", v
+    assert number(v.evidence, r"until (\S+) s") == pytest.approx(DT)
+
+
 # -- the survivors of `make mutants` in the check and psid10 judges ---------------------------
 
 def test_check_speed_change_is_relative_to_the_starting_speed(thesis):

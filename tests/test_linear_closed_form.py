@@ -219,3 +219,97 @@ def test_max_matched_error_matches_each_eigenvalue_once_relative_above_one():
     # 1.2 cannot reuse 1.1 (taken by 1.0): it gets 5.0, 3.8 / 1.2
     assert max_matched_error(np.array([1.0, 1.2]), np.array([1.1, 5.0])) == \
         pytest.approx(3.8 / 1.2, rel=1e-12)
+    # eigenvalues come in +- pairs: -1 takes -1.05 (0.05), not the 1.1 nearest to -(-1)
+    assert max_matched_error(np.array([-1.0, 1.0]), np.array([1.1, -1.05])) == \
+        pytest.approx(0.1, rel=1e-12)
+
+
+def test_the_root_bracketing_on_functions_with_known_roots():
+    """The critical speeds' root finder on straight lines, whose roots are known exactly, on a
+    grid of binary fractions (1/8 m/s) so a root can fall exactly on a grid point: that point is
+    the root, in either direction of the crossing (steep enough, 8 (0.5 - s), that the sample
+    before is exactly 1); a rising crossing is none when only falling ones count; a root in the
+    last interval is bracketed by the grid's ends; 1e-14 is brentq's xtol."""
+    from comparisons.judgments.meijaard import _first_root, _grid
+    grid = _grid(0.0, 1.0, 0.125)
+    np.testing.assert_array_equal(grid, np.arange(9) * 0.125)
+    np.testing.assert_array_equal(_grid(0.0, 0.005, 0.01), [0.0, 0.005])   # one step at least
+    np.testing.assert_array_equal(_grid(2.0, 3.0, 0.5), [2.0, 2.5, 3.0])
+
+    def falling(s):
+        return 8.0 * (0.5 - np.asarray(s, dtype=float).reshape(-1))
+
+    def rising(s):
+        return np.asarray(s, dtype=float).reshape(-1) - 0.3
+
+    def late(s):
+        return np.asarray(s, dtype=float).reshape(-1) - 0.95
+
+    assert _first_root(falling, grid, down_only=True) == 0.5
+    assert _first_root(falling, grid, down_only=False) == 0.5
+    assert _first_root(rising, grid, down_only=True) is None
+    assert _first_root(rising, grid, down_only=False) == pytest.approx(0.3, abs=1e-14)
+    assert _first_root(late, grid, down_only=False) == pytest.approx(0.95, abs=1e-14)
+
+
+def test_the_closed_forms_matrices_are_read_only_and_a_scalar_speed_gives_one_state_matrix():
+    from comparisons.judgments.meijaard import state_matrix
+    from reference_model.benchmark import TABLE1
+    cf = closed_form(TABLE1.as_dict())
+    for key in MATRICES:
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(cf, key)[0, 0] = 1.0
+    A = state_matrix(cf, V)
+    assert A.shape == (4, 4)
+    # d/dt [q, q'] = [q', ...]: the upper half is [0 I]
+    np.testing.assert_array_equal(A[:2], [[0, 0, 1, 0], [0, 0, 0, 1]])
+    assert state_matrix(cf, [V, 2 * V]).shape == (2, 4, 4)
+
+
+def test_the_capsize_speed_is_the_root_of_det_K_above_the_weave_speed_only():
+    """The product of the four eigenvalues is det K(v) / det M, and K = g K0 + v^2 K2 with K2's
+    first column zero makes det K linear in v^2: one root, v^2 = -g det K0 / (K0_11 K2_22 -
+    K0_21 K2_12), worked here from the matrices. On the benchmark it is the capsize speed
+    (above the weave speed); with the steer axis tilt halved (lam = pi/20) it lies
+    below that bicycle's weave speed (5.38 < 6.40 m/s), where there is no capsize to find: the
+    search starts at the weave speed, so none. 1e-9 m/s: brentq to 1e-14 on both."""
+    from comparisons.judgments.meijaard import closed_form_critical_speeds
+    from reference_model.benchmark import TABLE1
+
+    def det_k_root(cf):
+        K0, K2 = cf.K0, cf.K2
+        return math.sqrt(-cf.g * np.linalg.det(K0)
+                         / (K0[0, 0] * K2[1, 1] - K0[1, 0] * K2[0, 1]))
+
+    b = TABLE1.as_dict()
+    cf = closed_form(b)
+    weave, capsize = closed_form_critical_speeds(cf)
+    assert weave < capsize == pytest.approx(det_k_root(cf), abs=TOL_SPEED)
+    steep = closed_form({**b, "lam": b["lam"] / 2})
+    weave, capsize = closed_form_critical_speeds(steep)
+    assert det_k_root(steep) < weave and capsize is None
+
+
+def test_the_linear_checks_fields_on_a_narrow_range_and_a_bicycle_without_counterpart():
+    """The judgment itself (the stage's rows are above): on the benchmark over 0..5 m/s the
+    weave speed (4.29) is in range and the capsize speed (6.02) is not, so neither side finds
+    one and that agrees; the drag-free benchmark needs no note. The thesis bicycle (thesis
+    contact, drag) has no counterpart, said with its model, its range and the drag note. A
+    matrix's error is the largest difference over its scale (max |entry| here: 0.5 / 10) at
+    the entry where it is largest."""
+    from comparisons.judgments.linear_check import _matrix_check, linear_benchmark_check
+    from comparisons.judgments.tolerances import Tolerance
+    check = linear_benchmark_check(load_model("benchmark"), TOLS, speeds=(0.0, 5.0))
+    assert (check.reason, check.note, check.speeds_range) == ("", "", (0.0, 5.0))
+    weave, capsize = check.speeds
+    assert weave.closed_form == pytest.approx(4.29238253634111, abs=TOL_SPEED)
+    assert (capsize.closed_form, capsize.linearization, capsize.passed) == (None, None, True)
+    assert check.passed
+    other = linear_benchmark_check(load_model("thesis"), TOLS)
+    assert other.model == "thesis" and other.speeds_range == (0.0, 10.0)
+    assert other.reason.startswith("no benchmark counterpart: model.contact")
+    assert other.note.startswith("thesis has drag (cv = ") and other.passed is None
+    expected = np.array([[10.0, -2.0], [3.0, 4.0]])
+    got = expected + np.array([[0.0, 0.1], [-0.5, 0.0]])
+    m = _matrix_check("K0", got, expected, Tolerance("x", 1e-3, "max_abs", "by hand"))
+    assert (m.error, m.worst, m.passed) == (pytest.approx(0.05, rel=1e-12), "K0[delta, phi]", False)

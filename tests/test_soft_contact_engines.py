@@ -60,7 +60,9 @@ def test_the_ranking_puts_the_smallest_error_at_the_horizon_first():
 
 
 def test_rows_not_side_by_side_are_refused():
-    with pytest.raises(ValueError, match="not on one model"):
+    with pytest.raises(ValueError, match="not on one model, scenario and horizon: "
+                       r"a: thesis-disc, stability-psid10, 0\.43 s; "
+                       r"b: thesis-disc, stability-psid10, 0\.3 s$"):
         rank([_row("a", 1e-4), _row("b", 1e-4, horizon=0.3)])
     with pytest.raises(ValueError, match="twice"):
         rank([_row("a", 1e-4), _row("a", 2e-4)])
@@ -72,6 +74,26 @@ def test_the_shared_horizon_is_the_last_sample_before_the_ground_must_pull():
     assert shared_horizon(t, None, 0.6, 0.5) == pytest.approx(0.5)       # the window
     assert shared_horizon(t, 0.44, 0.25, 0.6) == pytest.approx(0.25)     # the reproducible part
     assert shared_horizon(t, 0.445, 0.6, 0.6) == pytest.approx(0.44)     # off the grid
+
+
+def test_the_shared_horizon_treats_a_billionth_of_a_step_as_round_off():
+    """The grid's own step sets the round-off: a time within 1e-9 of a step of a sample is that
+    sample, one 1.5e-9 of a step away is another instant. On a grid far from 0 (t0 = 100 s,
+    dt = 0.01 s), so a step taken from the wrong samples (t1 + t0, t2 - t0, 1 s, 0) moves the
+    band; and the one- and two-sample grids, whose step is 1 s by definition or t1 - t0."""
+    t = 100.0 + np.arange(61) * 0.01
+    dt = float(t[1] - t[0])
+    t43, t44 = float(t[43]), float(t[44])
+    # the ground must pull at t44 itself (up to round-off): the last sample before is t43
+    assert shared_horizon(t, t44 + 0.5e-9 * dt, 200.0, 200.0) == t43
+    # it must pull 1.5e-9 dt after t44: t44 is before it
+    assert shared_horizon(t, t44 + 1.5e-9 * dt, 200.0, 200.0) == t44
+    # the meaningful horizon a round-off short of t44 is t44; 1.5e-9 dt short of it is not
+    assert shared_horizon(t, None, t44 - 0.5e-9 * dt, 200.0) == t44
+    assert shared_horizon(t, None, t44 - 1.5e-9 * dt, 200.0) == t43
+    assert shared_horizon(np.array([2.0]), None, 5.0, 5.0) == 2.0
+    two = np.array([100.0, 100.01])
+    assert shared_horizon(two, 100.01 + 1.5e-9 * 0.01, 200.0, 200.0) == 100.01
 
 
 def _traj(t, q, diag):
@@ -97,10 +119,34 @@ def test_a_row_measures_its_own_run_up_to_the_horizon():
     assert row.slip_rms == pytest.approx(np.sqrt((1e-6 + 9e-6) / 2), rel=1e-12)
     assert row.slip_max == pytest.approx(3e-3) and row.penetration_max == pytest.approx(1e-6)
     assert row.run_time_per_simulated_second == pytest.approx(0.5)
+    # the error grows linearly, so its max up to the horizon is the one at it; the rear wheel
+    # sinks 1e-6 m, the front none: RMS over both wheels' samples 1e-6 / sqrt(2)
+    assert row.error_max == pytest.approx(8e-4, rel=1e-12)
+    assert row.penetration_rms == pytest.approx(1e-6 / np.sqrt(2), rel=1e-12)
+    assert (row.label, row.model, row.scenario, row.settings, row.lift_off_s) == \
+        ("X", "", "", "", None)
+    named = contact_row("x", "X", ref, _traj(t, q, diag), horizon=0.4, seconds=0.3,
+                        model="thesis-disc", scenario="stability-psid10", settings="h = 0.002",
+                        lift_off_s=0.45)
+    assert (named.model, named.scenario, named.settings, named.lift_off_s) == \
+        ("thesis-disc", "stability-psid10", "h = 0.002", 0.45)
     short = _traj(t[:31], q[:31], {k: v[:31] for k, v in diag.items()})
     cut = contact_row("y", "Y", ref, short, horizon=0.4, seconds=0.1)
     assert not cut.reached and cut.error_at_horizon is None
+    assert cut.error_max == pytest.approx(2e-3 * 0.3, rel=1e-12)    # measured to its own end
     assert [r.row.engine for r in rank([cut, row])] == ["x", "y"]
+    # a run that ends on the horizon reaches it; so does one whose only sample is a horizon
+    # at the start (no drift yet: error 0)
+    ends = contact_row("z", "Z", ref, _traj(t[:41], q[:41], {k: v[:41] for k, v in diag.items()}),
+                       horizon=0.4, seconds=0.1)
+    assert ends.reached and ends.error_at_horizon == pytest.approx(8e-4, rel=1e-12)
+    first = contact_row("w", "W", ref, _traj(t[:1], q[:1], {k: v[:1] for k, v in diag.items()}),
+                        horizon=0.0, seconds=0.1)
+    assert first.reached and first.error_at_horizon == 0.0
+    # a reference that ends before the horizon: no common sample there, so not reached
+    early = contact_row("v", "V", _traj(t[:31], np.zeros_like(q[:31]), {}), _traj(t, q, diag),
+                        horizon=0.4, seconds=0.3)
+    assert not early.reached and early.error_at_horizon is None
 
 
 # -- two soft-contact engines through the stage ------------------------------------------------

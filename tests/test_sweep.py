@@ -189,6 +189,12 @@ def test_samples_keep_inertias_physical_and_within_the_spread(benchmark_params):
             assert np.all(s1 >= 0.5 * s0 - 1e-12) and np.all(s1 <= 1.5 * s0 + 1e-12)
         assert p.I2xx == p.I2zz and p.g == base["g"]
     assert sample_parameters(spec, 7) == sample_parameters(spec, 7)
+    # a sampled bicycle is the base's kind: its name, front contact and triangle rule (the
+    # benchmark's disc, not Parameters' defaults 'custom', 'thesis', 'strict')
+    loose = make_spec(benchmark_params.replace(triangle="warn"), sample=2, spread=10.0,
+                      checks=("terms",))
+    p = sample_parameters(loose, 1)
+    assert (p.name, p.contact, p.triangle) == ("benchmark", "disc", "warn")
     with pytest.raises(SpecError, match="--spread"):
         make_spec(benchmark_params, sample=3, spread=-1.0)
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import pickle
+import re
 
 from comparisons.judgments.tolerances import (TOLERANCES_FILE, Tolerance, ToleranceError,
                                               Tolerances, load_complete, load_tolerances)
@@ -51,7 +52,7 @@ def test_the_tolerances_are_a_value_that_pickles_and_hashes(tmp_path):
     tighter.write_text(TOLERANCES_FILE.read_text().replace(
         "[mass_matrix]\ntolerance = 1e-12", "[mass_matrix]\ntolerance = 1e-13"))
     assert load_tolerances(tighter) != tols and load_tolerances(tighter).as_json() != tols.as_json()
-    with pytest.raises(KeyError):
+    with pytest.raises(KeyError, match="no_such_quantity"):
         tols["no_such_quantity"]
     with pytest.raises(dataclasses.FrozenInstanceError):
         tols.entries = ()
@@ -62,9 +63,57 @@ def test_a_user_file_must_have_every_packaged_table(tmp_path):
     path.write_text("[mass_matrix]\n" + GOOD)
     with pytest.raises(ToleranceError, match=r"lacks \[inverse_dynamics\] \(and \d+ more\)"):
         load_complete(path)
-    with pytest.raises(ToleranceError, match="no file"):
-        load_complete(tmp_path / "missing.toml")
+    gone = tmp_path / "missing.toml"
+    with pytest.raises(ToleranceError, match="no file " + re.escape(repr(str(gone)))):
+        load_complete(gone)
     assert load_complete(TOLERANCES_FILE) == load_tolerances()
+
+
+def test_the_missing_tables_are_counted_and_a_single_one_named_alone(tmp_path):
+    """The count after the first missing table is the packaged file's tables (read here with
+    tomllib) less the one the file has and the one named; a file lacking only one table names
+    it without '(and ...)'."""
+    import tomllib
+    tables = list(tomllib.loads(TOLERANCES_FILE.read_text()))
+    path = tmp_path / "few.toml"
+    path.write_text("[mass_matrix]\n" + GOOD)
+    with pytest.raises(ToleranceError, match=rf"lacks \[{tables[1]}\] \(and {len(tables) - 2} "
+                                             r"more\); start from a copy of"):
+        load_complete(path)
+    almost = tmp_path / "almost.toml"
+    almost.write_text("".join(f"[{name}]\n" + GOOD for name in tables[:-1]))
+    with pytest.raises(ToleranceError, match=rf"{almost} lacks \[{tables[-1]}\]; start from"):
+        load_complete(almost)
+    two = tmp_path / "two.toml"
+    two.write_text("".join(f"[{name}]\n" + GOOD for name in tables[:-2]))
+    with pytest.raises(ToleranceError, match=rf"lacks \[{tables[-2]}\] \(and 1 more\);"):
+        load_complete(two)
+
+
+def test_as_json_is_the_files_tables_and_each_scale_divides_by_its_own_number():
+    """as_json (what a sweep's spec hash covers) is the file's tables as tomllib reads them,
+    under the same keys; the normalizers by hand: 'absolute' 1, 'max_abs' the largest |entry|
+    (1 for an all-zero reference), 'max_abs_or_one' at least 1 and never the terms,
+    'largest_term' the largest |entry| of the terms (at least 1)."""
+    import tomllib
+    assert load_tolerances().as_json() == tomllib.loads(TOLERANCES_FILE.read_text())
+    ref, terms = np.array([[0.5, -3.0]]), [np.array([7.0]), np.array([-20.0])]
+    by = {s: Tolerance("x", 1e-6, s, "why") for s in ("absolute", "max_abs", "max_abs_or_one",
+                                                      "largest_term")}
+    assert by["absolute"].normalizer(ref, terms) == 1.0
+    assert by["max_abs"].normalizer(ref, terms) == 3.0
+    assert by["max_abs"].normalizer(np.zeros(2)) == 1.0
+    assert by["max_abs_or_one"].normalizer(ref, terms) == 3.0
+    assert by["max_abs_or_one"].normalizer(np.array([0.5])) == 1.0
+    assert by["largest_term"].normalizer(ref, terms) == 20.0
+    assert by["largest_term"].normalizer(np.array([0.25])) == 1.0
+
+
+def test_tolerances_equal_a_mapping_only_with_the_same_tables():
+    tols = load_tolerances()
+    assert tols == dict(tols)
+    assert tols != {} and tols != {**dict(tols), "mass_matrix": None}
+    assert tols != [("mass_matrix", tols["mass_matrix"])]
 
 
 ENTRY = "[x]\n" + GOOD
