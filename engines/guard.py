@@ -114,12 +114,12 @@ def _array(value, what: str) -> np.ndarray:
     return arr.astype(np.float64, copy=False)
 
 
-def _finite(arr: np.ndarray, what: str) -> np.ndarray:
+def _finite(arr: np.ndarray, what: str, cannot: str = "a state cannot be evaluated"
+            ) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
         raise EngineCallError(f"{what} returned {int(bad.sum())} non-finite value(s) (NaN or "
-                              f"inf) of {arr.size}; raise instead when a state cannot be "
-                              "evaluated")
+                              f"inf) of {arr.size}; raise instead when {cannot}")
     return arr
 
 
@@ -146,13 +146,7 @@ def check_eigenvalues(value, speeds, what: str = "eigenvalues") -> np.ndarray:
     if arr.shape != want:
         raise EngineCallError(f"{what} returned shape {arr.shape} for {want[0]} speed(s); "
                               f"expected {want}")
-    arr = arr.astype(complex, copy=False)
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        raise EngineCallError(f"{what} returned {int(bad.sum())} non-finite value(s) (NaN or "
-                              f"inf) of {arr.size}; raise instead when a speed cannot be "
-                              "linearized")
-    return arr
+    return _finite(arr.astype(complex, copy=False), what, "a speed cannot be linearized")
 
 
 def check_trajectory(traj, what: str = "simulate"):
