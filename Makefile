@@ -9,7 +9,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 STAMP = $(VENV)/.installed
 
-.PHONY: venv test test-slow test-bicycles report example bench clean mutants
+.PHONY: venv test test-slow test-bicycles report example bench clean mutants mutants-table
 
 venv: $(STAMP)
 
@@ -47,30 +47,25 @@ example: $(STAMP)  ## the committed example report: markdown, figures, summary.j
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/run.py
 
-# Mutation testing (not part of `make test`): mutmut, set up in pyproject.toml [tool.mutmut]
-# (which modules: every hand-written module of the judgments, the stages, the reference model
-# and the engines, generated code left out; which fast tests; why mutmut). Each run starts
-# afresh (mutmut caches results and would not notice changed tests); it prints the surviving
-# mutants (`mutmut show NAME` shows one) and the score. The whole set is several hours on the
-# shared 2-core machine (README, "Tests"); MUTANTS narrows it to a module or a few, e.g.
-# make mutants MUTANTS='comparisons.judgments.claims*'. Two worker processes (the machine's cores).
+# Mutation testing (not part of `make test`): mutmut, module by module (tests/mutation.py): each
+# module of pyproject.toml's [tool.mutmut] set is mutated alone in a scratch copy under
+# build/mutation/, against its own fast test selection ([tool.bicycle-xval.mutation.tests]),
+# and its result kept in build/mutation/results/. `make mutants` measures every module whose
+# result is missing or stale (module or tests changed), so an interrupted run resumes; the
+# whole set is hours on the 2-core machine (README, "Tests"). MODULE narrows it, e.g.
+# make mutants MODULE=comparisons/judgments/rows.py. `make mutants-table` prints the scores.
 MUTATION_STAMP = $(VENV)/.installed-mutation
-MUTANTS ?=
+MODULE ?=
 
 $(MUTATION_STAMP): pyproject.toml $(VENV)/bin/python
 	$(VENV)/bin/python -m pip install -e '.[all,test,mutation]'
 	touch $(MUTATION_STAMP)
 
 mutants: $(MUTATION_STAMP)
-	rm -rf mutants
-	$(VENV)/bin/mutmut run --max-children 2 $(MUTANTS) > mutants.log 2>&1 || (tail -20 mutants.log; exit 1)
-	$(VENV)/bin/mutmut results
-	$(VENV)/bin/mutmut export-cicd-stats > /dev/null
-	$(VENV)/bin/python -c "import json; s = json.load(open('mutants/mutmut-cicd-stats.json')); \
-	  tried = s['killed'] + s['survived'] + s['timeout'] + s['suspicious']; \
-	  print(f\"mutation score {s['killed'] + s['timeout']}/{tried} killed \" \
-	        f\"({100 * (s['killed'] + s['timeout']) / max(tried, 1):.1f} %), {s['survived']} survived, \" \
-	        f\"{s['no_tests']} not reached by the selected tests\")"
+	$(VENV)/bin/python tests/mutation.py $(if $(MODULE),$(MODULE),--all) --children 2
+
+mutants-table: $(MUTATION_STAMP)
+	$(VENV)/bin/python tests/mutation.py --table
 
 clean:  ## build leftovers and the generated-code cache (regenerated on next use)
 	rm -rf .cache build dist *.egg-info mutants mutants.log

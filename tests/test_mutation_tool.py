@@ -1,0 +1,77 @@
+"""`make mutants`' module-by-module runner (tests/mutation.py): the set it mutates, the test
+selection each module gets, and the scratch copy's narrowed configuration. Expected values are
+read from pyproject.toml itself with tomllib and fnmatch (the documented meaning of mutmut's
+globs), not from the runner."""
+
+from __future__ import annotations
+
+import fnmatch
+import tomllib
+from pathlib import Path
+
+import mutation
+
+ROOT = Path(__file__).resolve().parent.parent
+CFG = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["tool"]
+
+
+def test_the_set_is_every_hand_written_module_and_nothing_generated():
+    modules = mutation.module_set()
+    tracked = {str(p.relative_to(ROOT)) for pat in CFG["mutmut"]["only_mutate"]
+               for p in ROOT.glob(pat)}
+    # every module of the issue's four trees is in, each once, and the generated-code
+    # machinery is out
+    assert len(modules) == len(set(modules))
+    for tree in ("comparisons/judgments/", "comparisons/stages/", "reference_model/", "engines/"):
+        assert any(m.startswith(tree) for m in modules), tree
+    for engine in ("drake", "dart", "fmu", "symbrim", "exudyn", "kane", "mujoco", "pinocchio"):
+        assert f"engines/{engine}/engine.py" in modules, engine
+    for out in ("reference_model/equations/codegen.py", "engines/kane/codegen.py",
+                "engines/symbrim/derivation.py"):
+        assert (ROOT / out).is_file() and out not in modules, out
+    assert "engines/symbrim/derivation.py" in tracked   # matched by a glob, then left out
+    assert all(m.endswith(".py") for m in modules)
+
+
+def test_a_module_gets_its_own_selection_or_the_whole_one():
+    per = CFG["bicycle-xval"]["mutation"]["tests"]
+    pattern, tests = next(iter(per.items()))
+    module = next(m for m in mutation.module_set() if fnmatch.fnmatch(m, pattern))
+    assert mutation.selection_for(module) == tests
+    unmatched = next(m for m in mutation.module_set()
+                     if not any(fnmatch.fnmatch(m, p) for p in per))
+    assert mutation.selection_for(unmatched) == CFG["mutmut"]["pytest_add_cli_args_test_selection"]
+    # every selected test file exists (a typo would make mutmut collect nothing)
+    for tests in per.values():
+        for t in tests:
+            assert (ROOT / t.split("::")[0]).is_file(), t
+
+
+def test_the_scratch_configuration_narrows_only_the_mutmut_table():
+    text = (ROOT / "pyproject.toml").read_text("utf-8")
+    out = tomllib.loads(mutation._narrowed(text, "engines/runs.py", ["tests/test_a.py"], 3.0))
+    before = tomllib.loads(text)
+    mm = out["tool"]["mutmut"]
+    assert mm["only_mutate"] == ["engines/runs.py"]
+    assert mm["do_not_mutate"] == []
+    assert mm["pytest_add_cli_args_test_selection"] == ["tests/test_a.py"]
+    assert mm["timeout_multiplier"] == 3.0
+    # mutmut's other keys and every other table are kept as they were
+    for k in ("source_paths", "also_copy", "pytest_add_cli_args"):
+        assert mm[k] == before["tool"]["mutmut"][k]
+    assert out["project"] == before["project"]
+    assert out["tool"]["bicycle-xval"] == before["tool"]["bicycle-xval"]
+    assert out["tool"]["pytest"] == before["tool"]["pytest"]
+
+
+def test_a_result_is_stale_once_its_module_changes(tmp_path):
+    module = "engines/runs.py"
+    res = mutation.Result(module=module, module_sha=mutation._sha([module]),
+                          tests_sha=mutation._sha(mutation.selection_for(module)),
+                          tests=tuple(mutation.selection_for(module)), killed=3, timeouts=1,
+                          survived=("x__mutmut_1",), suspicious=0, not_reached=2, seconds=1.0,
+                          when="now", mutmut="3")
+    assert res.tried == 4          # killed (timeouts in it) + survived + suspicious
+    assert mutation.current(res)
+    assert not mutation.current(
+        mutation.Result(**{**res.__dict__, "module_sha": mutation._sha(["engines/base.py"])}))
