@@ -41,7 +41,8 @@ import sys
 import tomllib
 from pathlib import Path
 
-__all__ = ["Result", "equivalents", "main", "measure", "module_set", "selection_for", "table"]
+__all__ = ["Result", "equivalents", "main", "measure", "module_set", "selection_for", "survivors",
+           "table", "text_only"]
 
 ROOT = Path(__file__).resolve().parent.parent
 #: what the scratch copy leaves out: the virtualenv, git, generated reports and caches
@@ -65,10 +66,46 @@ class Result:
     seconds: float
     when: str
     mutmut: str
+    #: each survivor's changed lines ('-' old, '+' new, from ``mutmut show``)
+    diffs: dict[str, list[str]] = dataclasses.field(default_factory=dict)
 
     @property
     def tried(self) -> int:
         return self.killed + len(self.survived) + self.suspicious
+
+    @property
+    def text_only(self) -> tuple[str, ...]:
+        """The survivors whose change is inside string literals only (`text_only`)."""
+        return tuple(n for n in self.survived if n in self.diffs and text_only(self.diffs[n]))
+
+
+def _tokens(lines: list[str]) -> list[str] | None:
+    """The tokens of ``lines`` with every string literal's contents replaced by one marker
+    (lines of a statement the diff cut keep the tokens they have); None if they do not
+    tokenize."""
+    import io
+    import tokenize
+    src = "\n".join(ln.strip() for ln in lines) + "\n"
+    toks = []
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO(src).readline):
+            toks.append(tok)
+    except tokenize.TokenError:
+        pass     # a line of a statement cut by the diff (an open bracket): its tokens so far
+    except (IndentationError, SyntaxError):
+        return None
+    skip = {tokenize.NL, tokenize.NEWLINE, tokenize.INDENT, tokenize.DEDENT, tokenize.COMMENT,
+            tokenize.ENDMARKER}
+    return ["<str>" if t.type == tokenize.STRING else t.string for t in toks if t.type not in skip]
+
+
+def text_only(diff: list[str]) -> bool:
+    """Whether a mutant's changed lines differ only inside string literals: the wording or
+    case of a message, a label or report prose (the code around it is the same). Whether such
+    a text is a contract (a key, a file name, a column) still needs a reader."""
+    old = _tokens([ln[1:] for ln in diff if ln.startswith("-")])
+    new = _tokens([ln[1:] for ln in diff if ln.startswith("+")])
+    return old is not None and old == new
 
 
 def _pyproject(root: Path) -> dict:
@@ -162,24 +199,65 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
         if sep and name:
             status[name] = what.strip()
     count = lambda s: sum(1 for v in status.values() if v == s)
+    survivors = sorted(n for n, v in status.items() if v == "survived")
+    diffs = _diffs(venv_bin, scratch, survivors)
     version = subprocess.run([str(venv_bin / "mutmut"), "--version"], capture_output=True,
                              text=True).stdout.split()[-1]
     res = Result(module=module, module_sha=_sha([module]), tests_sha=_sha(tests),
                  tests=tuple(tests), killed=count("killed") + count("timeout"),
                  timeouts=count("timeout"),
-                 survived=tuple(sorted(n for n, v in status.items() if v == "survived")),
+                 survived=tuple(survivors),
                  suspicious=count("suspicious"), not_reached=count("no tests"),
-                 seconds=round(seconds, 1),
+                 seconds=round(seconds, 1), diffs=diffs,
                  when=datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
                  mutmut=version)
-    path = out / "results" / f"{slug(module)}.json"
+    _save(res, out)
+    progress(f"{module}: {res.killed}/{res.tried} killed ({_pct(res.killed, res.tried)}), "
+             f"{len(res.survived)} survived ({len(res.text_only)} of them in a text only), "
+             f"{res.not_reached} not reached, {seconds:.0f} s")
+    return res
+
+
+def _diffs(venv_bin: Path, scratch: Path, names) -> dict[str, list[str]]:
+    """Each mutant's changed lines, from ``mutmut show`` in its scratch copy."""
+    out = {}
+    for name in names:
+        shown = _mutmut(venv_bin, scratch, "show", name).stdout.splitlines()
+        out[name] = [ln for ln in shown if ln[:1] in "-+" and not ln.startswith(("---", "+++"))]
+    return out
+
+
+def survivors(module: str, out: Path = ROOT / "build" / "mutation") -> str:
+    """The surviving mutants of ``module``'s last measurement, each with its change and, if
+    listed, the reason it is equivalent (the diffs are read from the scratch copy once and
+    kept in the result)."""
+    res = load_result(module, out)
+    if res is None:
+        raise SystemExit(f"error: {module} has not been measured; run "
+                         f"python tests/mutation.py {module}")
+    missing = [n for n in res.survived if n not in res.diffs]
+    if missing:
+        scratch = out / slug(module)
+        if not (scratch / "mutants").is_dir():
+            raise SystemExit(f"error: the scratch copy {scratch} is gone; measure {module} again")
+        res = dataclasses.replace(res, diffs={**res.diffs, **_diffs(Path(sys.executable).parent,
+                                                                   scratch, missing)})
+        _save(res, out)
+    eq = equivalents()
+    lines = []
+    for n in res.survived:
+        tag = ("equivalent: " + eq[n]) if n in eq else ("text only" if n in res.text_only else "left")
+        lines += [f"{n}  [{tag}]", *("    " + d for d in res.diffs.get(n, []))]
+    return "\n".join(lines) + ("\n" if lines else "")
+
+
+def _save(res: Result, out: Path) -> Path:
+    path = out / "results" / f"{slug(res.module)}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(dataclasses.asdict(res), indent=1) + "\n")
     os.replace(tmp, path)
-    progress(f"{module}: {res.killed}/{res.tried} killed ({_pct(res.killed, res.tried)}), "
-             f"{len(res.survived)} survived, {res.not_reached} not reached, {seconds:.0f} s")
-    return res
+    return path
 
 
 def _pct(a: int, b: int) -> str:
@@ -192,6 +270,7 @@ def load_result(module: str, out: Path = ROOT / "build" / "mutation") -> Result 
         return None
     d = json.loads(path.read_text())
     d["tests"], d["survived"] = tuple(d["tests"]), tuple(d["survived"])
+    d.setdefault("diffs", {})
     return Result(**d)
 
 
@@ -215,11 +294,13 @@ def equivalents(root: Path = ROOT) -> dict[str, str]:
 
 
 def table(out: Path = ROOT / "build" / "mutation") -> str:
-    """The per-module scores as a markdown table, with the sum over the measured modules."""
+    """The per-module scores as a markdown table, with the sum over the measured modules.
+    'text only': survivors that change only a string literal's contents (`text_only`);
+    'equivalent': survivors listed in tests/mutation_equivalents.toml; 'left': the others."""
     eq = equivalents()
-    rows = ["| module | tried | killed | % | survived | equivalent | left | not reached | "
-            "measured |", "|---|---|---|---|---|---|---|---|---|"]
-    tot = dict(tried=0, killed=0, survived=0, eq=0, unreached=0)
+    rows = ["| module | tried | killed | % | survived | text only | equivalent | left | "
+            "not reached | measured |", "|---|---|---|---|---|---|---|---|---|---|"]
+    tot = dict.fromkeys(("tried", "killed", "survived", "text", "eq", "left", "unreached"), 0)
     missing = []
     for module in module_set():
         res = load_result(module, out)
@@ -227,16 +308,18 @@ def table(out: Path = ROOT / "build" / "mutation") -> str:
             missing.append(module)
             continue
         n_eq = sum(1 for n in res.survived if n in eq)
+        n_text = len(res.text_only)
+        left = sum(1 for n in res.survived if n not in eq)
         rows.append(f"| `{module}` | {res.tried} | {res.killed} | {_pct(res.killed, res.tried)} "
-                    f"| {len(res.survived)} | {n_eq} | {len(res.survived) - n_eq} "
+                    f"| {len(res.survived)} | {n_text} | {n_eq} | {left} "
                     f"| {res.not_reached} | {res.when}{'' if current(res) else ' (stale)'} |")
         for k, v in (("tried", res.tried), ("killed", res.killed),
-                     ("survived", len(res.survived)), ("eq", n_eq),
-                     ("unreached", res.not_reached)):
+                     ("survived", len(res.survived)), ("text", n_text), ("eq", n_eq),
+                     ("left", left), ("unreached", res.not_reached)):
             tot[k] += v
     rows.append(f"| **{len(module_set()) - len(missing)} measured** | {tot['tried']} | "
                 f"{tot['killed']} | {_pct(tot['killed'], tot['tried'])} | {tot['survived']} | "
-                f"{tot['eq']} | {tot['survived'] - tot['eq']} | {tot['unreached']} | |")
+                f"{tot['text']} | {tot['eq']} | {tot['left']} | {tot['unreached']} | |")
     text = "\n".join(rows) + "\n"
     if missing:
         text += f"\nNot measured yet ({len(missing)}): " + ", ".join(f"`{m}`" for m in missing) + "\n"
@@ -250,6 +333,8 @@ def main(argv=None) -> int:
                     help="every module of the set whose result is missing or stale")
     ap.add_argument("--table", action="store_true", help="print the per-module scores so far")
     ap.add_argument("--list", action="store_true", help="print the set and each test selection")
+    ap.add_argument("--survivors", metavar="MODULE",
+                    help="print the surviving mutants of MODULE's last measurement, with their changes")
     ap.add_argument("--children", type=int, default=2, help="mutmut worker processes [2]")
     ap.add_argument("--out", type=Path, default=ROOT / "build" / "mutation",
                     help="scratch copies and results [build/mutation]")
@@ -259,6 +344,9 @@ def main(argv=None) -> int:
     if a.list:
         for m in module_set():
             print(m, "<-", " ".join(selection_for(m)))
+        return 0
+    if a.survivors:
+        print(survivors(a.survivors, a.out), end="")
         return 0
     todo = list(a.modules)
     if a.all:

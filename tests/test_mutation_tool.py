@@ -75,3 +75,27 @@ def test_a_result_is_stale_once_its_module_changes(tmp_path):
     assert mutation.current(res)
     assert not mutation.current(
         mutation.Result(**{**res.__dict__, "module_sha": mutation._sha(["engines/base.py"])}))
+
+
+def test_a_change_inside_a_string_is_text_only_and_any_other_is_not():
+    # mutmut's own string mutants: wrapped in XX, case changed, an f-string's literal part
+    assert mutation.text_only(['-    raise ValueError(f"bad {x}: use y")',
+                               '+    raise ValueError(f"XXbad {x}: use yXX")'])
+    assert mutation.text_only(['-    label = "Weave"', '+    label = "weave"'])
+    # an operator, a number, a keyword argument's name, a dropped argument: code, not text
+    assert not mutation.text_only(['-    a = b + 1', '+    a = b - 1'])
+    assert not mutation.text_only(['-    a = f(x, 2.0)', '+    a = f(x, 3.0)'])
+    assert not mutation.text_only(['-    a = f(x, dtype=float)', '+    a = f(x, dtype=None)'])
+    assert not mutation.text_only(['-    a = f("x", y)', '+    a = f("x", )'])
+    # a string turned into None, a key's text (still a string: text only by this rule,
+    # which is why the table leaves equivalence to a reader)
+    assert not mutation.text_only(['-    a = "x"', '+    a = None'])
+    assert mutation.text_only(['-    d["xc"]', '+    d["XXxcXX"]'])
+
+
+def test_a_line_cut_from_a_longer_statement_is_still_classified():
+    # the diff shows one line of a call spread over several: unbalanced brackets
+    assert mutation.text_only(['-        num(d), "pass" if ok else "FAIL"))',
+                               '+        num(d), "pass" if ok else "fail"))'])
+    assert not mutation.text_only(['-        num(d), "pass" if ok else "FAIL"))',
+                                   '+        num(d), "pass" if not ok else "FAIL"))'])
