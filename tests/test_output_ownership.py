@@ -125,3 +125,40 @@ def test_run_into_the_package_is_one_line_before_any_stage(tmp_path, capsys):
         assert not bad.exists()
     finally:                                    # a planted bug must not leave a report there
         shutil.rmtree(bad, ignore_errors=True)
+
+
+def test_a_copy_of_the_project_is_refused_and_another_projects_folder_is_not(tmp_path):
+    from comparisons.stages.ownership import check_out_folder
+    copy = tmp_path / "copy"
+    copy.mkdir()
+    (copy / "pyproject.toml").write_text('[project]\nname = "bicycle-xval"\n', encoding="utf-8")
+    with pytest.raises(OutFolderError, match="holds the bicycle-xval sources"):
+        check_out_folder(copy, force=True)
+    # another project's, a pyproject without [project], one that is not TOML: someone else's
+    # folder (refused without --force, as any non-empty folder), never the sources
+    for i, text in enumerate(('[project]\nname = "other"\n', "[tool.x]\na = 1\n", "not = [toml")):
+        other = tmp_path / f"other{i}"
+        other.mkdir()
+        (other / "pyproject.toml").write_text(text, encoding="utf-8")
+        check_out_folder(other, force=True)
+        with pytest.raises(OutFolderError, match="no earlier report"):
+            check_out_folder(other)                     # force defaults to False
+    # a folder named pyproject.toml is not a pyproject
+    odd = tmp_path / "odd"
+    (odd / "pyproject.toml").mkdir(parents=True)
+    check_out_folder(odd, force=True)
+
+
+def test_a_file_as_out_is_refused_in_one_line(tmp_path):
+    from comparisons.stages.ownership import check_out_folder
+    f = tmp_path / "report.md"
+    f.write_text("x")
+    with pytest.raises(OutFolderError) as err:
+        check_out_folder(f, force=True)
+    assert str(err.value) == f"--out {f} is a file; give a folder for the report"
+
+
+def test_names_with_a_backslash_or_a_nul_are_never_the_writers():
+    # PurePosixPath takes both as ordinary characters: "figures/a\\b.png" would pass the shape
+    for name in ("figures/a\\b.png", "data/a\0.csv", "report.md\0"):
+        assert not is_report_name(name), repr(name)
