@@ -42,7 +42,7 @@ import tomllib
 from pathlib import Path
 
 __all__ = ["Result", "equivalents", "main", "measure", "module_set", "selection_for", "survivors",
-           "table", "text_only"]
+           "has_functions", "table", "text_only"]
 
 ROOT = Path(__file__).resolve().parent.parent
 #: what the scratch copy leaves out: the virtualenv, git, generated reports and caches
@@ -130,6 +130,14 @@ def selection_for(module: str, root: Path = ROOT) -> list[str]:
         if fnmatch.fnmatch(module, pattern):
             return list(tests)
     return list(data["tool"]["mutmut"]["pytest_add_cli_args_test_selection"])
+
+
+def has_functions(module: str, root: Path = ROOT) -> bool:
+    """Whether ``module`` defines a function or method: mutmut mutates nothing else, so a
+    module of re-exports and constants has no mutants (no run needed to know it)."""
+    import ast
+    tree = ast.parse((root / module).read_text("utf-8"))
+    return any(isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef)) for n in ast.walk(tree))
 
 
 def slug(module: str) -> str:
@@ -301,11 +309,11 @@ def table(out: Path = ROOT / "build" / "mutation") -> str:
     rows = ["| module | tried | killed | % | survived | text only | equivalent | left | "
             "not reached | measured |", "|---|---|---|---|---|---|---|---|---|---|"]
     tot = dict.fromkeys(("tried", "killed", "survived", "text", "eq", "left", "unreached"), 0)
-    missing = []
+    missing, empty = [], []
     for module in module_set():
         res = load_result(module, out)
         if res is None:
-            missing.append(module)
+            (missing if has_functions(module) else empty).append(module)
             continue
         n_eq = sum(1 for n in res.survived if n in eq)
         n_text = len(res.text_only)
@@ -317,12 +325,15 @@ def table(out: Path = ROOT / "build" / "mutation") -> str:
                      ("survived", len(res.survived)), ("text", n_text), ("eq", n_eq),
                      ("left", left), ("unreached", res.not_reached)):
             tot[k] += v
-    rows.append(f"| **{len(module_set()) - len(missing)} measured** | {tot['tried']} | "
+    rows.append(f"| **{len(module_set()) - len(missing) - len(empty)} measured** | {tot['tried']} | "
                 f"{tot['killed']} | {_pct(tot['killed'], tot['tried'])} | {tot['survived']} | "
                 f"{tot['text']} | {tot['eq']} | {tot['left']} | {tot['unreached']} | |")
     text = "\n".join(rows) + "\n"
     if missing:
         text += f"\nNot measured yet ({len(missing)}): " + ", ".join(f"`{m}`" for m in missing) + "\n"
+    if empty:
+        text += (f"\nNo function to mutate ({len(empty)}: re-exports and constants): "
+                 + ", ".join(f"`{m}`" for m in empty) + "\n")
     return text
 
 
@@ -350,8 +361,8 @@ def main(argv=None) -> int:
         return 0
     todo = list(a.modules)
     if a.all:
-        todo += [m for m in module_set()
-                 if (r := load_result(m, a.out)) is None or not current(r)]
+        todo += [m for m in module_set() if has_functions(m)
+                 and ((r := load_result(m, a.out)) is None or not current(r))]
     if not todo and not a.table:
         ap.error("name a module, or give --all, --table or --list")
     for i, m in enumerate(dict.fromkeys(todo), 1):

@@ -99,3 +99,10 @@ def test_a_line_cut_from_a_longer_statement_is_still_classified():
                                '+        num(d), "pass" if ok else "fail"))'])
     assert not mutation.text_only(['-        num(d), "pass" if ok else "FAIL"))',
                                    '+        num(d), "pass" if not ok else "FAIL"))'])
+
+
+def test_a_module_without_functions_has_nothing_to_mutate(tmp_path):
+    (tmp_path / "shim.py").write_text('"""doc"""\nfrom x import *  # noqa\nA = 1\nclass C:\n    b = 2\n')
+    (tmp_path / "code.py").write_text("class C:\n    def f(self):\n        return 1\n")
+    assert not mutation.has_functions("shim.py", tmp_path)
+    assert mutation.has_functions("code.py", tmp_path)
