@@ -20,7 +20,11 @@ result whose module or tests changed since as stale.
 
 Surviving mutants that cannot change any behaviour a user or caller relies on are listed, each
 with its reason, in ``tests/mutation_equivalents.toml``; the table counts them apart from the
-survivors left to kill. Counting: tried = killed + survived + timeouts + suspicious (mutants no
+survivors left to kill. mutmut runs each mutant only against the tests that executed its
+function in its first run, which misses what a module- or session-scoped fixture built for
+many tests; so each of mutmut's survivors is run once more, applied alone to the scratch copy,
+against the module's whole selection (``--no-rerun`` skips it), and counted as killed if a test
+fails there. Counting: tried = killed + survived + timeouts + suspicious (mutants no
 selected test reaches are counted apart, as 'not reached'); a timeout counts as killed, as
 mutmut counts it.
 """
@@ -68,6 +72,9 @@ class Result:
     mutmut: str
     #: each survivor's changed lines ('-' old, '+' new, from ``mutmut show``)
     diffs: dict[str, list[str]] = dataclasses.field(default_factory=dict)
+    #: mutants mutmut let survive that the module's whole selection kills when run on the
+    #: mutant alone (`confirm`): counted as killed
+    killed_on_rerun: tuple[str, ...] = ()
 
     @property
     def tried(self) -> int:
@@ -175,7 +182,8 @@ def _mutmut(venv_bin: Path, scratch: Path, *args: str, log=None) -> subprocess.C
 
 
 def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mutation",
-            timeout_multiplier: float | None = None, progress=print) -> Result:
+            timeout_multiplier: float | None = None, rerun: bool = True,
+            progress=print) -> Result:
     """Mutate ``module`` alone in a scratch copy and run its selection; the result is written
     to ``out/results/<slug>.json`` and returned."""
     import time
@@ -208,21 +216,27 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
             status[name] = what.strip()
     count = lambda s: sum(1 for v in status.values() if v == s)
     survivors = sorted(n for n, v in status.items() if v == "survived")
+    rerun_killed = confirm(module, survivors, tests, scratch, venv_bin, progress) if rerun else ()
+    survivors = [n for n in survivors if n not in rerun_killed]
     diffs = _diffs(venv_bin, scratch, survivors)
     version = subprocess.run([str(venv_bin / "mutmut"), "--version"], capture_output=True,
                              text=True).stdout.split()[-1]
     res = Result(module=module, module_sha=_sha([module]), tests_sha=_sha(tests),
-                 tests=tuple(tests), killed=count("killed") + count("timeout"),
+                 tests=tuple(tests),
+                 killed=count("killed") + count("timeout") + len(rerun_killed),
                  timeouts=count("timeout"),
                  survived=tuple(survivors),
                  suspicious=count("suspicious"), not_reached=count("no tests"),
-                 seconds=round(seconds, 1), diffs=diffs,
+                 seconds=round(time.perf_counter() - t0, 1), diffs=diffs,
+                 killed_on_rerun=tuple(rerun_killed),
                  when=datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
                  mutmut=version)
     _save(res, out)
     progress(f"{module}: {res.killed}/{res.tried} killed ({_pct(res.killed, res.tried)}), "
              f"{len(res.survived)} survived ({len(res.text_only)} of them in a text only), "
-             f"{res.not_reached} not reached, {seconds:.0f} s")
+             f"{res.not_reached} not reached, {seconds:.0f} s"
+             + (f" (+ {len(res.killed_on_rerun)} killed on the rerun, {res.seconds - seconds:.0f} s)"
+                if rerun else ""))
     return res
 
 
@@ -233,6 +247,40 @@ def _diffs(venv_bin: Path, scratch: Path, names) -> dict[str, list[str]]:
         shown = _mutmut(venv_bin, scratch, "show", name).stdout.splitlines()
         out[name] = [ln for ln in shown if ln[:1] in "-+" and not ln.startswith(("---", "+++"))]
     return out
+
+
+def confirm(module: str, names, tests: list[str], scratch: Path, venv_bin: Path,
+            progress=print) -> tuple[str, ...]:
+    """The survivors among ``names`` that the whole selection ``tests`` kills.
+
+    mutmut runs each mutant only against the tests that executed its function in its first
+    run, and a function that ran while a module- or session-scoped fixture was built is
+    recorded for the first test that built it only: a mutant of an engine's constructor is
+    then run against one test, while every test using the fixture would see it. Here each
+    survivor is applied to the scratch copy's source (``mutmut apply``) and the whole
+    selection run on it (pytest, stopping at the first failure), the source restored after."""
+    source = scratch / module
+    original = source.read_bytes()
+    killed = []
+    args = [str(venv_bin / "python"), "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+            "-m", "not slow and not bicycles", *tests]
+    try:
+        for i, name in enumerate(names, 1):
+            applied = _mutmut(venv_bin, scratch, "apply", name)
+            if applied.returncode != 0 or source.read_bytes() == original:
+                source.write_bytes(original)
+                continue
+            run = subprocess.run(args, cwd=scratch, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.DEVNULL, timeout=1800, check=False)
+            source.write_bytes(original)
+            if run.returncode not in (0, 5):        # 1: a test failed; 2-4: it broke collection
+                killed.append(name)
+            if i % 10 == 0 or i == len(names):
+                progress(f"  {module}: rerun {i}/{len(names)} survivors on the whole selection, "
+                         f"{len(killed)} killed")
+    finally:
+        source.write_bytes(original)
+    return tuple(killed)
 
 
 def survivors(module: str, out: Path = ROOT / "build" / "mutation") -> str:
@@ -279,6 +327,7 @@ def load_result(module: str, out: Path = ROOT / "build" / "mutation") -> Result 
     d = json.loads(path.read_text())
     d["tests"], d["survived"] = tuple(d["tests"]), tuple(d["survived"])
     d.setdefault("diffs", {})
+    d["killed_on_rerun"] = tuple(d.get("killed_on_rerun", ()))
     return Result(**d)
 
 
@@ -347,6 +396,8 @@ def main(argv=None) -> int:
     ap.add_argument("--survivors", metavar="MODULE",
                     help="print the surviving mutants of MODULE's last measurement, with their changes")
     ap.add_argument("--children", type=int, default=2, help="mutmut worker processes [2]")
+    ap.add_argument("--no-rerun", action="store_true",
+                    help="do not rerun mutmut's survivors against the module's whole selection")
     ap.add_argument("--out", type=Path, default=ROOT / "build" / "mutation",
                     help="scratch copies and results [build/mutation]")
     a = ap.parse_args(argv)
@@ -367,7 +418,7 @@ def main(argv=None) -> int:
         ap.error("name a module, or give --all, --table or --list")
     for i, m in enumerate(dict.fromkeys(todo), 1):
         print(f"[{i}/{len(todo)}]", end=" ", flush=True)
-        measure(m, children=a.children, out=a.out)
+        measure(m, children=a.children, out=a.out, rerun=not a.no_rerun)
     if a.table or todo:
         print(table(a.out), end="")
     return 0
