@@ -55,6 +55,21 @@ def test_every_term_agrees_with_the_reference_at_random_states(pairs, name):
     assert not bad, bad
 
 
+@pytest.mark.parametrize("name", MODELS)
+def test_the_constraint_residual_away_from_the_constraints_is_the_references(pairs, name):
+    """C(q, dq) (height of the front contact point, horizontal velocities of both wheels'
+    material points at their contacts) at random states, which violate the constraints: the
+    terms above are compared on D and dD dq, which do not show a swapped or repeated row of C
+    (it is zero at consistent states). The reference's constraint_residual is its own
+    generated code; 1e-12 relative to the largest entry, as for D (round-off of both)."""
+    ref, drk = pairs[name]
+    st = random_states(20, seed=11)
+    mine = np.asarray(drk.constraint_residual(st.q, st.dq))
+    theirs = np.asarray(ref.model.constraint_residual(st.q, st.dq)).reshape(mine.shape)
+    assert np.abs(theirs).max(axis=0).min() > 1e-3       # every row is away from zero somewhere
+    assert np.abs(mine - theirs).max() <= 1e-12 * np.abs(theirs).max()
+
+
 def test_inverse_dynamics_takes_gravity_out_of_drakes(pairs):
     """Drake's CalcInverseDynamics leaves gravity (a force element) out: at rest with no
     acceleration it returns zero, while the thesis's M ddq - Qv - Qgrav is -Qgrav there, the
