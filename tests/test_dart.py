@@ -51,6 +51,20 @@ def test_terms_agree_with_the_reference_at_random_states(built, name):
     assert not bad, bad
 
 
+@pytest.mark.parametrize("name", MODELS)
+def test_the_constraint_residual_away_from_the_constraints_is_the_references(built, name):
+    """C(q, dq) at random states, which violate the constraints (the term comparison sees D
+    and dD dq, and C is zero at consistent states, so a wrong row of C would not show there):
+    against the reference's own constraint_residual, 1e-12 relative to the largest entry, as
+    for D."""
+    model, eng = built[name]
+    st = random_states(20, seed=11)
+    mine = np.asarray(eng.constraint_residual(st.q, st.dq))
+    theirs = np.asarray(model.constraint_residual(st.q, st.dq)).reshape(mine.shape)
+    assert np.abs(theirs).max(axis=0).min() > 1e-3       # every row is away from zero somewhere
+    assert np.abs(mine - theirs).max() <= 1e-12 * np.abs(theirs).max()
+
+
 def _mass_error(text, model, **flags):
     skeleton, coords = build_skeleton(model.params, text, **flags)
     rng = np.random.default_rng(1)
