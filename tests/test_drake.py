@@ -252,3 +252,82 @@ def test_a_body_that_breaks_the_triangle_inequality_is_declared_beyond_drake(tmp
     with pytest.raises(UnsupportedModel, match=rf"body {broken[0]} breaks it"):
         load_engine("drake", model)
     load_engine("drake", load_model("benchmark"))      # the control: a physical bicycle builds
+
+
+def _inertias(**changed):
+    """Every body's tensor entries (physical: the benchmark's), some changed."""
+    from types import SimpleNamespace
+    p = load_model("benchmark").params
+    names = [f"I{b}{k}" for b in (2, 3, 4, 5) for k in ("xx", "yy", "zz", "xz")]
+    return SimpleNamespace(**{**{n: getattr(p, n, 0.0) for n in names}, **changed})
+
+
+@pytest.mark.parametrize("body", (2, 3, 4, 5))
+def test_each_body_is_checked_for_the_triangle_inequality(body):
+    """Moments 1, 1 and 2.5 kg m^2 about the body's axes break A + B >= C by 0.5 (no product
+    of inertia): whichever body has them, the engine's check names it."""
+    from engines import UnsupportedModel
+    from engines.drake.plant import refuse_non_physical_inertia
+    refuse_non_physical_inertia(_inertias())                  # the benchmark itself passes
+    bad = _inertias(**{f"I{body}xx": 1.0, f"I{body}yy": 2.5, f"I{body}zz": 1.0, f"I{body}xz": 0.0})
+    with pytest.raises(UnsupportedModel, match=rf"body {body} breaks it \(principal moments "
+                                               r"1, 1, 2\.5 kg m\^2\)"):
+        refuse_non_physical_inertia(bad)
+
+
+def test_a_product_of_inertia_alone_can_break_the_triangle_inequality():
+    """Ixx = Izz = 1, Iyy = 0.3 kg m^2 is physical with Ixz = 0 (0.3 + 1 >= 1); Ixz = 0.8 turns
+    the x-z block's moments into 1 -+ 0.8 = 0.2 and 1.8: 0.2 + 0.3 < 1.8."""
+    from engines import UnsupportedModel
+    from engines.drake.plant import refuse_non_physical_inertia
+    refuse_non_physical_inertia(_inertias(I3xx=1.0, I3yy=0.3, I3zz=1.0, I3xz=0.0))
+    with pytest.raises(UnsupportedModel, match=r"body 3 breaks it \(principal moments 0\.2, "
+                                               r"0\.3, 1\.8 kg m\^2\)"):
+        refuse_non_physical_inertia(_inertias(I3xx=1.0, I3yy=0.3, I3zz=1.0, I3xz=0.8))
+
+
+def test_the_run_urdf_frees_the_rear_contact_height_and_drops_the_nominal_wheels():
+    """The contact run's URDF, read back with the standard library's XML parser: phi hangs
+    from a new massless zc_link, which a prismatic z joint (effectively unlimited, no effort)
+    hangs from yc_link; no collision element is left (the run adds its own wheels); and, as in
+    any URDF, no element holds character data. Everything else is the export's."""
+    import xml.etree.ElementTree as ET
+    from engines.drake.plant import run_urdf_text
+    from reference_model.exports.urdf import urdf_text
+    params = load_model("thesis-disc").params
+    robot = ET.fromstring(run_urdf_text(params))
+    export = ET.fromstring(urdf_text(params))
+    joints = {j.get("name"): j for j in robot.iter("joint")}
+    assert joints["phi"].find("parent").get("link") == "zc_link"
+    zc = joints["zc"]
+    assert zc.get("type") == "prismatic"
+    assert (zc.find("parent").get("link"), zc.find("child").get("link")) == ("yc_link", "zc_link")
+    assert zc.find("axis").get("xyz").split() == ["0", "0", "1"]
+    assert zc.find("origin").get("xyz").split() == ["0", "0", "0"]
+    limit = zc.find("limit")
+    assert float(limit.get("lower")) <= -1e9 and float(limit.get("upper")) >= 1e9
+    assert float(limit.get("effort")) == 0.0
+    links = [ln.get("name") for ln in robot.iter("link")]
+    assert "zc_link" in links and robot.find("link[@name='zc_link']").find("inertial") is None
+    assert links == [ln.get("name") for ln in export.iter("link")] + ["zc_link"]
+    assert not list(robot.iter("collision")) and list(export.iter("collision"))
+    for el in robot.iter():
+        assert not (el.text or "").strip() and not (el.tail or "").strip(), el.tag
+    # every other joint is the export's (tags, attributes, children)
+    shape = lambda e: (e.tag, e.attrib, [shape(c) for c in e])
+    for j in export.iter("joint"):
+        if j.get("name") != "phi":
+            assert shape(joints[j.get("name")]) == shape(j)
+
+
+def test_an_export_whose_phi_joint_moved_is_refused_in_one_line(monkeypatch):
+    import engines.drake.plant as plant
+    from engines import EngineError
+    text = plant.urdf_text(load_model("thesis-disc").params)
+    monkeypatch.setattr(plant, "urdf_text", lambda p: text.replace(
+        '<parent link="yc_link"/>\n    <child link="phi_link"/>',
+        '<parent link="ground"/>\n    <child link="phi_link"/>'))
+    assert plant.urdf_text(None) != text, "the export's phi joint changed: update this test"
+    with pytest.raises(EngineError) as err:
+        plant.run_urdf_text(None)
+    assert str(err.value) == "the URDF export's phi joint does not hang from yc_link as expected"
