@@ -214,3 +214,59 @@ def test_the_reference_solvers_on_darts_terms_follow_the_reference(built):
     ours, ref = run_forward(eng, sc), run_forward(model, sc)
     assert ours.status == "completed"
     assert np.abs(ours.q - ref.q).max() < 1e-9
+
+
+def test_a_given_urdf_is_the_one_built():
+    """build_skeleton(p, text) builds ``text``, not the export of p: the benchmark's URDF
+    with the thesis's parameters gives the benchmark's total mass (85 + 4 + 2 + 3 = 94 kg,
+    Meijaard et al. 2007, Table 1) and the thesis's g."""
+    thesis, bench = load_model("thesis").params, load_model("benchmark").params
+    skeleton, _ = build_skeleton(thesis, urdf_text(bench))
+    assert abs(skeleton.getMass() - 94.0) < 1e-12
+    assert abs(build_skeleton(thesis)[0].getMass() - (thesis.m2 + thesis.m3 + thesis.m4
+                                                      + thesis.m5)) < 1e-12
+    assert np.allclose(skeleton.getGravity(), [0.0, 0.0, -thesis.g])
+
+
+def test_a_urdf_dart_cannot_parse_and_a_skeleton_of_other_joints_are_refused_in_one_line():
+    with pytest.raises(RuntimeError) as err:
+        load_urdf("<robot name='x'><link name='a'/>")            # not XML: cut short
+    assert str(err.value) == "DART's URDF loader did not parse the bicycle's URDF"
+    free = load_urdf(urdf_text(load_model("thesis").params), fixed_root=False)
+    with pytest.raises(RuntimeError) as err:
+        Coordinates.of(free)
+    msg = str(err.value)
+    assert msg.startswith("DART's skeleton has the degrees of freedom (") and "\n" not in msg
+    assert msg.endswith(f"not the thesis's {tuple(COORDINATES)}")
+
+
+def test_the_run_urdf_frees_the_rear_contact_height():
+    """The contact run's URDF read back with the standard library's XML parser: a str (what
+    the loader is documented to take), phi hanging from a massless zc_link, which a prismatic
+    z joint at the origin, unlimited in practice, hangs from yc_link; the rest the export's.
+    The export has one XML declaration, which the run's text drops."""
+    import xml.etree.ElementTree as ET
+    from engines.dart.skeleton import run_urdf
+    p = load_model("thesis-disc").params
+    export_text = urdf_text(p)
+    assert export_text.count("?>") == 1
+    text = run_urdf(p)
+    assert isinstance(text, str) and "?>" not in text
+    robot, export = ET.fromstring(text), ET.fromstring(export_text.split("?>", 1)[1])
+    joints = {j.get("name"): j for j in robot.iter("joint")}
+    assert joints["phi"].find("parent").get("link") == "zc_link"
+    zc = joints["zc"]
+    assert zc.get("type") == "prismatic"
+    assert (zc.find("parent").get("link"), zc.find("child").get("link")) == ("yc_link", "zc_link")
+    assert zc.find("axis").get("xyz").split() == ["0", "0", "1"]
+    origin = zc.find("origin")
+    assert origin.get("xyz").split() == ["0", "0", "0"] == origin.get("rpy").split()
+    limit = zc.find("limit")
+    assert float(limit.get("lower")) <= -1e9 and float(limit.get("upper")) >= 1e9
+    links = [ln.get("name") for ln in robot.iter("link")]
+    assert links == [ln.get("name") for ln in export.iter("link")] + ["zc_link"]
+    assert robot.find("link[@name='zc_link']").find("inertial") is None
+    shape = lambda e: (e.tag, e.attrib, [shape(c) for c in e])
+    for j in export.iter("joint"):
+        if j.get("name") != "phi":
+            assert shape(joints[j.get("name")]) == shape(j)
