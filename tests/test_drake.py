@@ -325,8 +325,8 @@ def test_an_export_whose_phi_joint_moved_is_refused_in_one_line(monkeypatch):
     from engines import EngineError
     text = plant.urdf_text(load_model("thesis-disc").params)
     monkeypatch.setattr(plant, "urdf_text", lambda p: text.replace(
-        '<parent link="yc_link"/>\n    <child link="phi_link"/>',
-        '<parent link="ground"/>\n    <child link="phi_link"/>'))
+        '<joint name="phi" type="continuous">\n    <parent link="yc_link"/>',
+        '<joint name="phi" type="continuous">\n    <parent link="ground"/>'))
     assert plant.urdf_text(None) != text, "the export's phi joint changed: update this test"
     with pytest.raises(EngineError) as err:
         plant.run_urdf_text(None)
