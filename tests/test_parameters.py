@@ -439,3 +439,107 @@ def test_frame_inertia_agrees_with_eigenvalues(xx: float, zz: float, angle: floa
     elif margin < -1e-9 * principal[2]:
         with pytest.raises(ParameterError, match=r"body 3 \(frame\+rider\).*triangle"):
             Parameters(**values)
+
+
+# ---------------------------------------------------------------------------- issue 24: gaps
+# Each test below was written against a mutant that survived the suite (mutmut, issue 24):
+# its expected values are the documented contract (docstrings) or a hand-made input.
+
+
+def test_from_vector_keeps_every_keyword_and_defaults_to_custom() -> None:
+    thesis = Parameters(**thesis_dict())
+    p = Parameters.from_vector(thesis.vector(), name="v", contact="disc", source="here.toml",
+                               triangle="warn")
+    assert (p.name, p.contact, p.source, p.triangle) == ("v", "disc", "here.toml", "warn")
+    assert p.vector().tolist() == thesis.vector().tolist()
+    plain = Parameters.from_vector(thesis.vector())
+    # the dataclass's own defaults, as Parameters(**values) has them
+    assert (plain.name, plain.contact, plain.triangle) == ("custom", "thesis", "strict")
+
+
+def test_from_vector_of_the_wrong_length_names_the_source_and_both_lengths() -> None:
+    with pytest.raises(ParameterError) as info:
+        Parameters.from_vector([1.0] * 29, source="vec.txt")
+    err = info.value
+    assert (err.file, err.key) == ("vec.txt", "(vector)")
+    assert err.problem == "parameter vector has 29 entries, expected 30"
+    assert err.fix == "pass one value per name in PARAMETER_NAMES, in that order"
+
+
+def test_as_dict_carries_contact_triangle_and_the_benchmark() -> None:
+    from reference_model.parameters.benchmark import TABLE1
+    p = Parameters.from_benchmark(TABLE1.as_dict(), allow_triangle_violation=True)
+    d = p.as_dict()
+    assert list(d)[:30] == list(PARAMETER_NAMES)
+    assert list(d)[30:] == ["name", "contact", "source", "triangle", "benchmark"]
+    assert (d["contact"], d["triangle"]) == ("disc", "warn")
+    assert d["benchmark"] is p.benchmark == TABLE1     # benchmark is not compared by ==: say it
+
+
+def test_reference_parameters_are_the_benchmark_with_disc_contact_and_provenance() -> None:
+    from reference_model.parameters.benchmark import TABLE1, reference_parameters
+    kwargs = reference_parameters()
+    assert set(kwargs) == set(PARAMETER_NAMES) | {"contact", "benchmark"}
+    p = Parameters(**kwargs)
+    assert p.contact == "disc" and p.benchmark is TABLE1
+
+
+def test_closest_is_none_without_a_near_name() -> None:
+    from reference_model.parameters.schema import closest
+    assert closest("zzzzzz", PARAMETER_NAMES) is None
+    assert closest("m_3", PARAMETER_NAMES) == "m3"
+
+
+def test_a_quoted_word_is_not_told_to_drop_its_quotes(tmp_path: Path) -> None:
+    # only a quoted number has the fix "remove the quotes"; a quoted word needs a number
+    path = write(tmp_path, set_entry(THESIS_TEXT, "m3", '{ value = "heavy", unit = "kg" }'))
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    assert info.value.fix == "write a finite real number, e.g. value = 1.0"
+
+
+def test_toml_syntax_error_at_end_of_file(tmp_path: Path) -> None:
+    # tomllib says "(at end of document)", no line and column: the key is the end of the file
+    path = write(tmp_path, THESIS_TEXT + "\nextra = ")
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    err = info.value
+    assert (err.file, err.key) == (str(path), "(end of file)")
+    assert err.problem == "invalid TOML: Invalid value (at end of document)"
+    assert err.fix == "correct the TOML syntax"
+
+
+@pytest.mark.parametrize("where", ["first", "middle", "last"])
+def test_toml_syntax_error_quotes_its_own_line(tmp_path: Path, where: str) -> None:
+    lines = THESIS_TEXT.rstrip("\n").splitlines()
+    bad = "x3 = 0.26047 m"      # a statement with something after it: tomllib gives its line
+    if where == "first":
+        lines.insert(0, bad)
+    elif where == "last":
+        lines.append(bad)
+    else:
+        lines = [bad if line.startswith("x3 =") else line for line in lines]
+    lineno = lines.index(bad) + 1          # counted by hand: 1-based
+    path = write(tmp_path, "\n".join(lines))
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    err = info.value
+    assert err.key == f"line {lineno}"
+    assert err.problem.endswith(f": {bad.strip()!r}")
+    assert err.fix == 'correct the TOML syntax on that line, e.g. x3 = { value = 0.26047, unit = "m" }'
+
+
+def test_unknown_key_of_another_table_is_sent_there(tmp_path: Path) -> None:
+    # I3yyy (a typo of I3yy) in [geometry]: like no geometry key, like inertia.I3yy
+    path = write(tmp_path, THESIS_TEXT.replace("[geometry]\n", "[geometry]\nI3yyy = 1.0\n"))
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    assert info.value.fix == "did you mean 'inertia.I3yy'? rename it and put it in [inertia]"
+
+
+def test_unknown_key_like_nothing_lists_the_tables_keys(tmp_path: Path) -> None:
+    path = write(tmp_path, THESIS_TEXT.replace("[mass]\n", "[mass]\nwheelbase = 1.0\n"))
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    assert info.value.key == "mass.wheelbase"
+    assert info.value.fix == "remove it; valid keys in [mass] are m2, m3, m4, m5"
