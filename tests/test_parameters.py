@@ -543,3 +543,33 @@ def test_unknown_key_like_nothing_lists_the_tables_keys(tmp_path: Path) -> None:
         load_parameters(path)
     assert info.value.key == "mass.wheelbase"
     assert info.value.fix == "remove it; valid keys in [mass] are m2, m3, m4, m5"
+
+
+def test_inertia_of_no_body_lists_the_bodies() -> None:
+    p = Parameters(**thesis_dict())
+    for bad in (1, 6, True):
+        with pytest.raises(ValueError) as info:
+            p.inertia(bad)
+        assert str(info.value) == ("body must be one of (2, 3, 4, 5) (2: rear wheel, 3: frame+rider, "
+                                   f"4: fork/handlebar, 5: front wheel), got {bad!r}")
+
+
+@pytest.mark.parametrize(("table", "key", "fix"), [
+    # the symmetric entry of the one product the frame has
+    ("inertia", "I3zx", "the tensor is symmetric: I3zx is the entry I3xz; rename it to inertia.I3xz"),
+    ("inertia", "I2xz", "remove it: body 2 (rear wheel) is an axisymmetric wheel with no product of inertia"),
+    # not a tensor entry at all: the nearest name, as for any other table
+    ("inertia", "I3xxx", "did you mean 'I3xx'? rename it to inertia.I3xx"),
+    # a tensor entry written in another table: sent to [inertia] (to the nearest name, I3xz
+    # and I3zz tie), not told it is symmetric
+    ("geometry", "I3zx", re.compile(r"did you mean 'inertia\.I3(xz|zz)'\? rename it and put it in \[inertia\]")),
+])
+def test_unknown_inertia_like_keys_get_their_own_fix(tmp_path: Path, table: str, key: str, fix: str) -> None:
+    path = write(tmp_path, THESIS_TEXT.replace(f"[{table}]\n", f"[{table}]\n{key} = 1.0\n"))
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    assert info.value.key == f"{table}.{key}"
+    if isinstance(fix, str):
+        assert info.value.fix == fix
+    else:
+        assert fix.fullmatch(info.value.fix), info.value.fix
