@@ -459,3 +459,83 @@ def test_toml_text_refusals_name_the_source_and_the_unknown_names():
     assert info.value.file == "somewhere.txt"
     with pytest.raises(ValueError, match=r"^uncertainties for unknown benchmark names: wheelbase, x$"):
         toml_text(TABLE1, name="b", source="s", uncertainties={"w": 0.01, "wheelbase": 1.0, "x": 2.0})
+
+
+def _exportable_thesis() -> Parameters:
+    """The thesis bicycle with a benchmark counterpart (disc contact, no drag); its front hub
+    is off the frame's x axis (z5 != 0), unlike any model built from Table 1."""
+    return load_parameters(THESIS_FILE).replace(cv=0.0).with_contact("disc")
+
+
+def test_export_of_a_model_not_built_from_table1_is_its_bicycle():
+    # the reverse formulas against an independent formulation: the paper's closed-form
+    # matrices of the exported Table 1 are the reference model's linearization (to 1e-10 of
+    # each matrix's largest entry, as for the imported sets above: round-off of two formulas)
+    p = _exportable_thesis()
+    assert p.benchmark is None and p.z5 != 0.0
+    expected = closed_form(to_benchmark(p))
+    lin = linearize(load_model(p), 0.0)
+    for key in MATRICES:
+        mat = getattr(expected, key)
+        err = np.max(np.abs(getattr(lin, key) - mat)) / np.max(np.abs(mat))
+        assert err < TOL_MATRIX, f"{key}: relative error {err:.2e}"
+
+
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
+@pytest.mark.parametrize("lam", [1.4, -0.5])
+def test_a_steep_or_backward_steer_axis_exports_without_provenance(lam):
+    # any tilt in (-pi/2, pi/2) has a counterpart (1.4 rad > pi/3, a chopper's)
+    values = TABLE1.as_dict() | {"lam": lam}
+    bare = Parameters.from_benchmark(values).replace(benchmark=None)
+    assert to_benchmark(bare)["lam"] == pytest.approx(lam, abs=1e-14)   # reverse formulas: round-off
+
+
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
+@pytest.mark.parametrize(("changes", "blocker"), [
+    # R_front - R_rear = 2.68 m > the 1.02 m between the hubs: no pitch puts both on the ground
+    ({"R_front": 3.0}, "geometry: the front wheel cannot touch the ground with the frame upright "
+                       "(no upright pitch beta)"),
+    # the front hub 0.9 m below the rear one, a little ahead: only a pitch past pi/2 lands it
+    ({"xa": 0.01, "x5": 0.0, "za": -0.5, "z5": -0.4, "R_front": 0.4},
+     "geometry: upright pitch beta = {beta} rad gives no steer axis tilt in (-pi/2, pi/2)"),
+    # the thesis wheels: Ixx = 0.108 kg m^2 (the listing, tests/thesis_params.py)
+    ({"I2zz": 0.2}, "inertia.I2zz = 0.2 differs from inertia.I2xx = 0.108 (Table 1's rear wheel has Izz = Ixx)"),
+    ({"I5zz": 0.2}, "inertia.I5zz = 0.2 differs from inertia.I5xx = 0.108 (Table 1's front wheel has Izz = Ixx)"),
+])
+def test_export_refusal_says_why_in_one_error(changes, blocker):
+    p = _exportable_thesis().replace(**changes, source="bike.toml")
+    with pytest.raises(ParameterError) as info:
+        to_benchmark(p)
+    err = info.value
+    assert (err.file, err.key) == ("bike.toml", "(benchmark export)")
+    head = "model 'thesis' has no Meijaard et al. (2007) benchmark counterpart: "
+    if "{beta}" in blocker:
+        # the pitch said is a root of the upright disc contact, R_rear - a sin(beta) + b cos(beta)
+        # = R_front, (a, b) = (xa + x5, za + z5) = (0.01, -0.9) (hand-derived, docs/model.md)
+        found = re.fullmatch(re.escape(head + blocker).replace(re.escape("{beta}"), "(.+)"),
+                             err.problem)
+        assert found, err.problem
+        beta = float(found.group(1))
+        assert 0.32 - 0.01 * np.sin(beta) - 0.9 * np.cos(beta) == pytest.approx(0.4, abs=1e-12)
+        assert abs(beta) > np.pi / 2
+    else:
+        assert err.problem == head + blocker
+    assert err.fix == ("export a model with contact 'disc', cv = 0 and wheels with Izz = Ixx "
+                       "(e.g. params.replace(cv=0.0).with_contact('disc'))")
+
+
+def test_export_refusal_of_the_contact_says_the_benchmarks_wheel():
+    p = load_parameters(THESIS_FILE).replace(cv=0.0)
+    with pytest.raises(ParameterError) as info:
+        to_benchmark(p)
+    assert info.value.problem.endswith(
+        "model.contact = 'thesis' (the benchmark's front wheel is a knife edge touching the "
+        "ground at its lowest point: contact 'disc')")
+
+
+def test_an_uncertainty_is_noted_beside_the_names_description(tmp_path):
+    src = tmp_path / "UncertainBenchmark.txt"
+    src.write_text((DATA / "Table1Benchmark.txt").read_text(encoding="utf-8")
+                   .replace("w = 1.02+/-0.0", "w = 1.02+/-0.01"), encoding="utf-8")
+    line = next(x for x in import_benchmark(src).text.splitlines() if x.startswith("w = "))
+    assert line.endswith("# wheel base, m; +/- 0.01 in the source (dropped)"), line
