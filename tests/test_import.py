@@ -524,13 +524,13 @@ def test_export_refusal_says_why_in_one_error(changes, blocker):
                        "(e.g. params.replace(cv=0.0).with_contact('disc'))")
 
 
-def test_export_refusal_of_the_contact_says_the_benchmarks_wheel():
-    p = load_parameters(THESIS_FILE).replace(cv=0.0)
+def test_export_refusal_lists_every_reason_the_contact_first():
     with pytest.raises(ParameterError) as info:
-        to_benchmark(p)
+        to_benchmark(load_parameters(THESIS_FILE))          # the thesis's contact, cv = 0.8
     assert info.value.problem.endswith(
-        "model.contact = 'thesis' (the benchmark's front wheel is a knife edge touching the "
-        "ground at its lowest point: contact 'disc')")
+        ": model.contact = 'thesis' (the benchmark's front wheel is a knife edge touching the "
+        "ground at its lowest point: contact 'disc'); environment.cv = 0.8 kg/m (the benchmark "
+        "has no drag)")
 
 
 def test_an_uncertainty_is_noted_beside_the_names_description(tmp_path):
