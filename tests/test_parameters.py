@@ -573,3 +573,47 @@ def test_unknown_inertia_like_keys_get_their_own_fix(tmp_path: Path, table: str,
         assert info.value.fix == fix
     else:
         assert fix.fullmatch(info.value.fix), info.value.fix
+
+
+# ---------------------------------------------------------------------------- benchmark.toml's tool
+
+
+def test_the_named_benchmark_file_is_what_its_generator_writes() -> None:
+    from reference_model.parameters.loading import BENCHMARK_FILE, named_model_text
+    assert named_model_text() == BENCHMARK_FILE.read_text(encoding="utf-8")
+
+
+def test_check_passes_on_the_shipped_file(capsys) -> None:
+    from reference_model.parameters.loading import BENCHMARK_FILE, main
+    assert main(["--check"]) == 0
+    out, err = capsys.readouterr()
+    assert (out, err) == (f"{BENCHMARK_FILE}: matches the formulas\n", "")
+
+
+def test_check_names_each_value_that_differs_and_write_repairs_it(tmp_path, monkeypatch, capsys) -> None:
+    from reference_model.parameters import loading
+    from reference_model.parameters.benchmark import TABLE1, model_values
+    stale = tmp_path / "benchmark.toml"
+    text = loading.BENCHMARK_FILE.read_text(encoding="utf-8")
+    x3 = model_values(TABLE1)["x3"]
+    changed = re.sub(r"^x3 = \{ value = [^,]+,", "x3 = { value = 0.5,", text, flags=re.M)
+    changed = re.sub(r"^m3 = \{ value = [^,]+,", "m3 = { value = 80.0,", changed, flags=re.M)
+    stale.write_text(changed, encoding="utf-8")
+    monkeypatch.setattr(loading, "BENCHMARK_FILE", stale)
+    assert loading.main(["--check"]) == 1
+    out, err = capsys.readouterr()
+    assert out == f"{stale}: 2 value(s) differ\n"
+    assert err == f"x3: file 0.5, formula {x3!r}\nm3: file 80.0, formula 85.0\n"   # Table 1: mB = 85 kg
+    assert loading.main(["--write"]) == 0
+    assert capsys.readouterr().out == f"wrote {stale}\n"
+    assert stale.read_text(encoding="utf-8") == text
+    assert loading.main(["--check"]) == 0
+
+
+def test_the_benchmark_tool_needs_one_of_write_or_check(capsys) -> None:
+    from reference_model.parameters.loading import main
+    for argv in ([], ["--write", "--check"]):
+        with pytest.raises(SystemExit) as info:
+            main(argv)
+        assert info.value.code == 2
+    assert "python -m reference_model.benchmark" in capsys.readouterr().err
