@@ -617,3 +617,74 @@ def test_the_benchmark_tool_needs_one_of_write_or_check(capsys) -> None:
             main(argv)
         assert info.value.code == 2
     assert "python -m reference_model.benchmark" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------- issue 24: more gaps
+
+
+def test_parameters_from_table1_are_custom_and_strict_by_default() -> None:
+    from reference_model.parameters.benchmark import TABLE1
+    from reference_model.parameters.values import parameters_from_benchmark
+    from reference_model.params import TriangleInequalityError
+    assert Parameters.from_benchmark(TABLE1.as_dict()).name == "custom"
+    assert parameters_from_benchmark(TABLE1.as_dict()).name == "custom"
+    # IByy far above IBxx + IBzz: not a real body
+    broken = TABLE1.as_dict() | {"IByy": 30.0}
+    with pytest.raises(TriangleInequalityError):
+        parameters_from_benchmark(broken)
+    assert parameters_from_benchmark(broken, allow_triangle_violation=True).warnings
+
+
+def test_replace_with_an_unknown_field_names_it_and_the_source() -> None:
+    p = Parameters(**thesis_dict(), source="bike.toml")
+    with pytest.raises(ParameterError) as info:
+        p.replace(zzzzzz=1.0)
+    err = info.value
+    assert (err.file, err.key, err.problem) == ("bike.toml", "zzzzzz", "'zzzzzz' is not a field of Parameters")
+    assert err.fix == "use a name from PARAMETER_NAMES, or name/contact/source"
+    with pytest.raises(ParameterError) as info:
+        p.replace(contcat="disc")
+    assert info.value.fix == "use 'contact'"
+
+
+def test_replace_keeps_a_benchmark_given_with_the_change() -> None:
+    from reference_model.parameters.benchmark import TABLE1
+    p = Parameters.from_benchmark(TABLE1.as_dict())
+    assert p.replace(g=p.g, benchmark=TABLE1).benchmark is TABLE1     # said explicitly: kept
+    assert p.replace(g=p.g).benchmark is None                         # not said: dropped
+
+
+def test_attach_benchmark_refusal_names_the_source_and_the_table() -> None:
+    from reference_model.parameters.benchmark import TABLE1
+    from reference_model.parameters.values import attach_benchmark
+    p = Parameters.from_benchmark(TABLE1.as_dict(), source="bike.toml").replace(benchmark=None)
+    moved = TABLE1.as_dict() | {"w": 1.1}
+    with pytest.raises(ParameterError) as info:
+        attach_benchmark(p, moved)
+    assert info.value.file == "bike.toml"
+    assert "does not follow from the [benchmark] table" in info.value.problem
+    assert attach_benchmark(p, TABLE1.as_dict()).benchmark == TABLE1
+
+
+def test_a_stray_top_level_g_in_a_model_file_is_the_model_files_error(tmp_path: Path) -> None:
+    # g is both a Table 1 name and a parameter: beside the model's tables it is misplaced,
+    # not a sign of a Table 1 file
+    path = write(tmp_path, "g = 9.81\n" + THESIS_TEXT)
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    assert (info.value.key, info.value.problem) == ("g", "parameter 'g' is outside any table")
+
+
+def test_resolve_model_of_a_path_is_strict_by_default(tmp_path: Path) -> None:
+    from reference_model.params import TriangleInequalityError
+    path = write(tmp_path, set_entry(THESIS_TEXT, "I3yy", '{ value = 30.0, unit = "kg*m^2" }'))
+    with pytest.raises(TriangleInequalityError):
+        resolve_model(path)
+    assert resolve_model(path, allow_triangle_violation=True).warnings
+
+
+def test_unknown_model_like_nothing_has_no_suggestion() -> None:
+    with pytest.raises(ParameterError) as info:
+        resolve_model("zzzz")
+    err = info.value
+    assert (err.file, err.key, err.problem) == ("zzzz", "model", "unknown model 'zzzz'")
