@@ -688,3 +688,37 @@ def test_unknown_model_like_nothing_has_no_suggestion() -> None:
         resolve_model("zzzz")
     err = info.value
     assert (err.file, err.key, err.problem) == ("zzzz", "model", "unknown model 'zzzz'")
+
+
+def test_a_flat_file_of_unknown_names_is_read_as_table1_an_empty_one_as_a_model(tmp_path: Path) -> None:
+    # flat key = number lines with no table and no model parameter: Table 1's layout, so its
+    # error lists Table 1's names; an empty file has no layout: the model's first table missing
+    with pytest.raises(ParameterError) as info:
+        load_parameters(write(tmp_path, "wheelbase = 1.02\n", "flat.toml"))
+    assert (info.value.key, info.value.problem) == ("wheelbase", "unknown benchmark parameter 'wheelbase'")
+    with pytest.raises(ParameterError) as info:
+        load_parameters(write(tmp_path, "", "empty.toml"))
+    assert (info.value.key, info.value.problem) == ("geometry", "table [geometry] is missing")
+
+
+def test_missing_file_lists_the_named_models() -> None:
+    with pytest.raises(ParameterError) as info:
+        load_parameters("nope.toml")
+    assert info.value.fix == ("give the path of an existing .toml parameter file "
+                              "(named models: thesis, thesis-disc, benchmark)")
+
+
+def test_unreadable_and_non_utf8_files_are_one_error_each(tmp_path: Path) -> None:
+    with pytest.raises(ParameterError) as info:
+        load_parameters(tmp_path)                     # a folder: the OS's own reason, no errno
+    err = info.value
+    assert (err.file, err.key, err.problem, err.fix) == (
+        str(tmp_path), "(file)", "cannot read the file: Is a directory",
+        "give the path of a readable .toml parameter file")
+    path = tmp_path / "latin1.toml"
+    path.write_bytes("# Bicicleta de Álvaro\n".encode("latin-1"))   # Á is byte 0xC1 at offset 14
+    with pytest.raises(ParameterError) as info:
+        load_parameters(path)
+    err = info.value
+    assert (err.file, err.key, err.problem, err.fix) == (
+        str(path), "(file)", "not UTF-8 text (byte 14)", "save the file as UTF-8")
