@@ -716,9 +716,9 @@ def test_unreadable_and_non_utf8_files_are_one_error_each(tmp_path: Path) -> Non
         str(tmp_path), "(file)", "cannot read the file: Is a directory",
         "give the path of a readable .toml parameter file")
     path = tmp_path / "latin1.toml"
-    path.write_bytes("# Bicicleta de Álvaro\n".encode("latin-1"))   # Á is byte 0xC1 at offset 14
+    path.write_bytes("# Bicicleta de Álvaro\n".encode("latin-1"))   # Á (0xC1) follows the 15 bytes "# Bicicleta de "
     with pytest.raises(ParameterError) as info:
         load_parameters(path)
     err = info.value
     assert (err.file, err.key, err.problem, err.fix) == (
-        str(path), "(file)", "not UTF-8 text (byte 14)", "save the file as UTF-8")
+        str(path), "(file)", "not UTF-8 text (byte 15)", "save the file as UTF-8")
