@@ -722,3 +722,46 @@ def test_unreadable_and_non_utf8_files_are_one_error_each(tmp_path: Path) -> Non
     err = info.value
     assert (err.file, err.key, err.problem, err.fix) == (
         str(path), "(file)", "not UTF-8 text (byte 15)", "save the file as UTF-8")
+
+
+def test_non_positive_moments_are_listed_with_their_unit() -> None:
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | {"I4xx": -1.0, "I4yy": 0.0})    # zero is not positive either
+    err = info.value
+    assert err.key == "inertia.I4xx, inertia.I4yy"
+    assert err.problem == ("inertia of body 4 (fork/handlebar) is not positive definite: "
+                           "I4xx = -1.0, I4yy = 0.0 kg*m^2 (moments must be > 0)")
+    assert err.fix == "use positive moments of inertia in kg*m^2"
+
+
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
+def test_a_singular_or_indefinite_xz_block_states_the_limit() -> None:
+    # xx zz - xz^2 = 9 - 9 = 0 exactly: singular, not positive definite
+    with pytest.raises(ParameterError, match="not positive definite"):
+        Parameters(**thesis_dict() | {"I3xx": 3.0, "I3zz": 3.0, "I3xz": 3.0, "I3yy": 4.0})
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | {"I3xx": 3.0, "I3zz": 3.0, "I3xz": 5.0, "I3yy": 4.0})
+    err = info.value
+    assert err.key == "inertia.I3xz, inertia.I3xx, inertia.I3zz"
+    assert err.fix == "make |I3xz| < sqrt(I3xx*I3zz) = 3 kg*m^2 (check its sign and units)"   # sqrt(9)
+
+
+def test_unknown_contact_lists_the_models() -> None:
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict(), contact="sphere")
+    assert info.value.key == "model.contact"
+    assert info.value.fix == ("use one of 'thesis', 'disc' ('thesis': rim point along the fork z "
+                              "axis; 'disc': lowest point of the disc)")
+
+
+def test_a_benchmark_file_is_read_as_one_by_its_suffix_and_takes_the_overrides(tmp_path: Path) -> None:
+    from reference_model.parameters.benchmark import TABLE1
+    # a .json holding a model parameter's name is still a Table 1 file: its suffix says so
+    with pytest.raises(ParameterError) as info:
+        load_parameters(write(tmp_path, '{"x3": 0.3}', "odd.JSON"))
+    assert info.value.problem == "unknown benchmark parameter 'x3'"
+    path = write(tmp_path, __import__("json").dumps(TABLE1.as_dict()), "bike.json")
+    p = load_parameters(path)
+    assert (p.source, p.name, p.contact) == (str(path), "bike", "disc")
+    q = load_parameters(path, contact="thesis", name="other")
+    assert (q.source, q.name, q.contact) == (str(path), "other", "thesis")
