@@ -743,6 +743,8 @@ def test_a_singular_or_indefinite_xz_block_states_the_limit() -> None:
         Parameters(**thesis_dict() | {"I3xx": 3.0, "I3zz": 3.0, "I3xz": 5.0, "I3yy": 4.0})
     err = info.value
     assert err.key == "inertia.I3xz, inertia.I3xx, inertia.I3zz"
+    assert err.problem == ("inertia of body 3 (frame+rider) is not positive definite: "
+                           "I3xz^2 = 25.0 >= I3xx*I3zz = 9.0 (kg*m^2)^2")
     assert err.fix == "make |I3xz| < sqrt(I3xx*I3zz) = 3 kg*m^2 (check its sign and units)"   # sqrt(9)
 
 
@@ -765,3 +767,45 @@ def test_a_benchmark_file_is_read_as_one_by_its_suffix_and_takes_the_overrides(t
     assert (p.source, p.name, p.contact) == (str(path), "bike", "disc")
     q = load_parameters(path, contact="thesis", name="other")
     assert (q.source, q.name, q.contact) == (str(path), "other", "thesis")
+
+
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
+def test_triangle_violations_name_the_moments_and_every_key() -> None:
+    # a wheel: principal moments are the diagonal, 3 > 1 + 1
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | {"I2xx": 1.0, "I2yy": 1.0, "I2zz": 3.0})
+    err = info.value
+    assert err.key == "inertia.I2zz"
+    assert err.problem == ("inertia of body 2 (rear wheel) violates the triangle inequality of "
+                           "principal moments (I1 + I2 >= I3 for a real body): I2zz = 3.0 > sum of "
+                           "the other two moments = 2.0 kg*m^2")
+    assert err.fix.startswith("check the values and units of I2xx, I2yy, I2zz;")
+    # the frame: [[3, 1], [1, 3]] has eigenvalues 3 +- 1 = (4, 2); 4 > 1 + 2 along the first axis
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | {"I3xx": 3.0, "I3zz": 3.0, "I3xz": 1.0, "I3yy": 1.0})
+    err = info.value
+    assert err.key == "inertia.I3xx, inertia.I3zz, inertia.I3xz"
+    assert err.problem.endswith(": principal moments (4.0, 1.0, 2.0) kg*m^2: 4.0 > sum of the "
+                                "other two = 3.0")
+    assert err.fix.startswith("check the values and units of I3xx, I3yy, I3zz, I3xz;")
+
+
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
+def test_triangle_tolerance_is_relative_to_the_largest_moment() -> None:
+    # TRIANGLE_RTOL = 1e-12 of the largest moment (2 here): 1.5e-12 over is rounding, 3e-12 is not
+    Parameters(**thesis_dict() | {"I5xx": 1.0, "I5yy": 1.0, "I5zz": 2.0 + 1.5e-12})
+    with pytest.raises(ParameterError, match="triangle inequality"):
+        Parameters(**thesis_dict() | {"I5xx": 1.0, "I5yy": 1.0, "I5zz": 2.0 + 3e-12})
+
+
+def test_a_tiny_moment_is_outside_the_range_not_skipped() -> None:
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | {"I2yy": 1e-12})     # below 1e-9 kg m^2: no bicycle part
+    assert info.value.key == "inertia.I2yy" and "is outside the range" in info.value.problem
+
+
+def test_bounds_after_a_non_positive_moment_are_still_checked() -> None:
+    # the bounds run before the tensors (schema docstring): g's absurd value is the error
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | {"I2xx": -1.0, "g": 1e6})
+    assert info.value.key == "environment.g"
