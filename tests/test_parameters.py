@@ -809,3 +809,15 @@ def test_bounds_after_a_non_positive_moment_are_still_checked() -> None:
     with pytest.raises(ParameterError) as info:
         Parameters(**thesis_dict() | {"I2xx": -1.0, "g": 1e6})
     assert info.value.key == "environment.g"
+
+
+def test_the_benchmark_tools_help_says_what_each_option_does(capsys) -> None:
+    from reference_model.parameters.loading import BENCHMARK_FILE, main
+    with pytest.raises(SystemExit) as info:
+        main(["--help"])
+    assert info.value.code == 0
+    out = " ".join(capsys.readouterr().out.split())          # argparse wraps to the terminal
+    assert out.startswith("usage: python -m reference_model.benchmark [-h] (--write | --check) ")
+    assert "``--write`` regenerates benchmark.toml; ``--check`` compares it with the formulas" in out
+    assert f"--write write {BENCHMARK_FILE}" in out
+    assert "--check exit 1 if the file's values differ" in out
