@@ -821,3 +821,24 @@ def test_the_benchmark_tools_help_says_what_each_option_does(capsys) -> None:
     assert "``--write`` regenerates benchmark.toml; ``--check`` compares it with the formulas" in out
     assert f"--write write {BENCHMARK_FILE}" in out
     assert "--check exit 1 if the file's values differ" in out
+
+
+@pytest.mark.parametrize(("changes", "key", "span", "unit"), [
+    ({"x3": 20.0}, "geometry.x3", "|x3| <= 10 m", "m"),             # a signed length: |value|
+    ({"cv": 200.0}, "environment.cv", "0 to 100 kg/m", "kg/m"),      # low 0, but not a magnitude
+])
+def test_an_absurd_value_states_its_range_and_the_fix(changes, key, span, unit) -> None:
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | changes)
+    err = info.value
+    assert err.key == key and f"({span}; " in err.problem
+    assert err.fix == f"check the value and its unit (the range is in {unit}, after unit conversion)"
+
+
+@pytest.mark.filterwarnings("ignore::reference_model.params.ParameterWarning")  # unusual on purpose
+def test_a_frame_without_product_is_named_like_a_wheel() -> None:
+    # I3xz = 0: the diagonal are the principal moments, 3 > 1 + 1 names I3xx alone
+    with pytest.raises(ParameterError) as info:
+        Parameters(**thesis_dict() | {"I3xx": 3.0, "I3yy": 1.0, "I3zz": 1.0, "I3xz": 0.0})
+    assert info.value.key == "inertia.I3xx"
+    assert info.value.problem.endswith(": I3xx = 3.0 > sum of the other two moments = 2.0 kg*m^2")
