@@ -811,12 +811,13 @@ def test_bounds_after_a_non_positive_moment_are_still_checked() -> None:
     assert info.value.key == "environment.g"
 
 
-def test_the_benchmark_tools_help_says_what_each_option_does(capsys) -> None:
+def test_the_benchmark_tools_help_says_what_each_option_does(capsys, monkeypatch) -> None:
     from reference_model.parameters.loading import BENCHMARK_FILE, main
+    monkeypatch.setenv("COLUMNS", "1000")      # argparse wraps (even at hyphens of the path)
     with pytest.raises(SystemExit) as info:
         main(["--help"])
     assert info.value.code == 0
-    out = " ".join(capsys.readouterr().out.split())          # argparse wraps to the terminal
+    out = " ".join(capsys.readouterr().out.split())
     assert out.startswith("usage: python -m reference_model.benchmark [-h] (--write | --check) ")
     assert "``--write`` regenerates benchmark.toml; ``--check`` compares it with the formulas" in out
     assert f"--write write {BENCHMARK_FILE}" in out
