@@ -126,3 +126,599 @@ def test_the_stage_asks_one_task_per_model_and_assembles_failures_as_failing_row
     assert [r["passed"] for r in second.comparisons] == [False]
     assert second.comparisons[0]["localized_to"] == "boom"
     assert (LinearCheckStage.name, LinearCheckStage.section) == ("linear-check", None)
+
+
+# -- the engines' linearization section (comparisons/stages/engine_eigenvalues.py) ----------
+
+import numpy as np  # noqa: E402
+from types import SimpleNamespace  # noqa: E402
+
+from comparisons.stages import engine_eigenvalues as ee  # noqa: E402
+
+#: tolerances as the judgment reads them (``tolerances[name].tolerance``), chosen by hand
+EE_TOL = {"engine_eigenvalues": SimpleNamespace(tolerance=1e-9),
+          "engine_critical_speeds": SimpleNamespace(tolerance=1e-6)}
+
+
+def _lam(v, re=lambda v: 1.0 - v / 4.0):
+    """Hand-made roll/steer eigenvalues (n, 4): a pair re(v) +- 1j (its real part crosses zero
+    from + to - at v = 4 by default: the weave speed), -10, and v - 6.25 (the product of the
+    four, (re^2 + 1)(-10)(v - 6.25), changes sign at v = 6.25, on neither grid: the capsize
+    speed)."""
+    v = np.atleast_1d(np.asarray(v, dtype=float))
+    r = re(v)
+    return np.stack([r + 1j, r - 1j, np.full_like(v, -10.0) + 0j, v - 6.25 + 0j], axis=1)
+
+
+class _FakeEngine:
+    """An engine whose eigenvalues are `_lam`'s (or ``lam``), recording each call's speeds."""
+
+    def __init__(self, lam=_lam, capabilities=("eigenvalues",)):
+        self.calls, self._lam, self.capabilities = [], lam, set(capabilities)
+
+    def supports(self, capability):
+        return capability in self.capabilities
+
+    def eigenvalues(self, v):
+        v = np.atleast_1d(np.asarray(v, dtype=float))
+        self.calls.append(v)
+        return self._lam(v)
+
+
+def test_the_comparisons_grid_range_and_default_models():
+    """docs/report.md: 21 speeds 0-10 m/s every 0.5 m/s, critical speeds in 0-10 m/s, the
+    benchmark and thesis-disc by default."""
+    assert ee.GRID == tuple(0.5 * i for i in range(21))
+    assert all(type(v) is float for v in ee.GRID)
+    assert ee.SPEED_RANGE == (0.0, 10.0)
+    assert ee.DEFAULT_MODELS == ("benchmark", "thesis-disc")
+
+
+def test_a_model_with_drag_is_linearized_with_cv_zero_and_says_so():
+    from reference_model import load_model
+    disc = load_model("thesis-disc")
+    assert disc.params.cv == 0.8            # kg/m: the premise of this test
+    m, note = ee.linearization_model("thesis-disc")
+    assert m.params == disc.params.replace(cv=0.0)
+    assert note == "thesis-disc has drag (cv = 0.8 kg/m): linearized with cv = 0"
+    bench, note = ee.linearization_model("benchmark")
+    assert bench.params == load_model("benchmark").params and note == ""
+
+
+def test_the_references_side_is_its_exact_eigenvalues_and_meijaards_speeds():
+    """The benchmark's weave and capsize speeds (Meijaard et al. 2007: 4.2924 and 6.0243 m/s,
+    `linearize`'s own root finding on a 0.01 m/s grid to brentq's 1e-12; 1e-10 m/s leaves
+    round-off room)."""
+    from reference_model import load_model
+    from reference_model.linearize import capsize_speed, weave_speed
+    m = load_model("benchmark")
+    lam, (w, k) = ee.reference_linearization(m, [1.0, 5.0])
+    assert np.array_equal(lam, m.eigenvalues(np.array([1.0, 5.0])))
+    assert abs(w - weave_speed(m, (0.0, 10.0))) < 1e-10 and abs(w - 4.2924) < 1e-4
+    assert abs(k - capsize_speed(m, (0.0, 10.0))) < 1e-10 and abs(k - 6.0243) < 1e-4
+
+
+def test_linearized_finds_the_critical_speeds_on_the_engines_own_eigenvalues():
+    """`_lam`'s weave speed is 4 m/s (a grid point: exact) and capsize 6.25 m/s (brentq to 1e-12:
+    1e-9 is round-off room); the grid's eigenvalues are one batch call, the root finding
+    calls of one speed each, and no curve without a fine grid."""
+    eng = _FakeEngine()
+    out = ee.linearized(eng, ee.GRID)
+    assert set(out) == {"lam", "curve", "critical", "seconds"}
+    assert np.array_equal(out["lam"], _lam(np.array(ee.GRID)))
+    assert out["curve"] is None
+    w, k = out["critical"]
+    assert w == 4.0 and abs(k - 6.25) < 1e-9
+    assert 0.0 <= out["seconds"] < 5.0      # a few ms; 5 s: any loaded machine
+    batches = [c for c in eng.calls if c.size > 1]
+    assert len(batches) == 1 and np.array_equal(batches[0], ee.GRID)
+
+
+def test_linearized_brackets_on_the_fine_grid_when_given():
+    """A weave pair unstable only in 4.2-4.4 m/s: the 0.5 m/s grid (4.0, 4.5) misses it, the
+    0.1 m/s fine grid brackets it (4.3) and finds 4.4 (to brentq's 1e-12: 1e-9 round-off
+    room); the fine grid's eigenvalues are the curve."""
+    from comparisons.stages.option_study import CURVE
+    narrow = lambda v: _lam(v, re=lambda v: -(v - 4.2) * (v - 4.4))   # noqa: E731
+    coarse = ee.linearized(_FakeEngine(narrow), ee.GRID)
+    assert coarse["critical"][0] is None and abs(coarse["critical"][1] - 6.25) < 1e-9
+    eng = _FakeEngine(narrow)
+    fine = ee.linearized(eng, ee.GRID, CURVE)
+    assert abs(fine["critical"][0] - 4.4) < 1e-9 and abs(fine["critical"][1] - 6.25) < 1e-9
+    assert np.array_equal(fine["curve"], narrow(np.array(CURVE)))
+    assert np.array_equal(fine["lam"], narrow(np.array(ee.GRID)))
+    batches = [c for c in eng.calls if c.size > 1]
+    assert len(batches) == 2 and np.array_equal(batches[1], CURVE)
+
+
+@pytest.fixture
+def fake_load(monkeypatch):
+    """`engines.load_engine` replaced: records (spec, model, options) and returns or raises
+    what the test sets in ``result``."""
+    import engines
+    state = SimpleNamespace(calls=[], result=None)
+
+    def load(spec, model, **options):
+        state.calls.append((spec, model, options))
+        if isinstance(state.result, Exception):
+            raise state.result
+        return state.result(model) if callable(state.result) else state.result
+
+    monkeypatch.setattr(engines, "load_engine", load)
+    return state
+
+
+def test_an_engines_linearization_value_on_a_model_with_drag(fake_load):
+    """The engine built on the cv = 0 model with the run's options; its eigenvalues (here the
+    reference's own, so both sides agree: critical speeds within 1e-10 m/s of two root
+    finders) and the reference's, under the keys the section reads."""
+    from reference_model import load_model
+    fake_load.result = lambda model: _FakeEngine(lam=model.eigenvalues)
+    v = ee.engine_linearization("some.spec", {"k": 1}, "thesis-disc", "Label")
+    ((spec, model, options),) = fake_load.calls
+    assert spec == "some.spec" and options == {"k": 1}
+    assert model.params == load_model("thesis-disc").params.replace(cv=0.0)
+    assert set(v) == {"engine", "model", "note", "speeds", "lam", "critical", "seconds",
+                      "ref_lam", "ref_critical"}
+    assert v["engine"] == "Label" and v["model"] == "thesis-disc" and v["speeds"] == ee.GRID
+    assert v["note"] == "thesis-disc has drag (cv = 0.8 kg/m): linearized with cv = 0"
+    assert np.array_equal(v["lam"], model.eigenvalues(np.array(ee.GRID)))
+    assert np.array_equal(v["ref_lam"], v["lam"])
+    for mine, ref in zip(v["critical"], v["ref_critical"]):
+        assert (mine is None and ref is None) or abs(mine - ref) < 1e-10
+    assert 0.0 <= v["seconds"] < 5.0
+    # no label: the spec names the engine
+    assert ee.engine_linearization("some.spec", {}, "benchmark")["engine"] == "some.spec"
+
+
+def test_a_declared_limitation_is_not_run_and_a_build_error_fails(fake_load):
+    from engines import EngineError, UnsupportedModel
+    from engines.base import CapabilityError
+    base = {"engine": "e", "model": "benchmark", "note": "", "speeds": ee.GRID}
+    for exc in (UnsupportedModel("no such contact"), CapabilityError("no such contact")):
+        fake_load.result = exc
+        assert ee.engine_linearization("s", {}, "benchmark", "e") == {
+            **base, "not_run": "not run on this model: no such contact"}
+    fake_load.result = EngineError("it broke")
+    assert ee.engine_linearization("s", {}, "benchmark", "e") == {**base, "failed": "it broke"}
+    fake_load.result = _FakeEngine(capabilities=())
+    assert ee.engine_linearization("s", {}, "benchmark", "e") == {
+        **base, "not_run": "its options leave it without the eigenvalues capability"}
+
+
+def _ee_value(engine, model, err_at=None, err=0.0, critical=(4.25, 6.5),
+              ref_critical=(4.25, 6.5), seconds=0.123, note=""):
+    """A hand-built `engine_linearization` value: the reference's eigenvalues `_lam` on the
+    grid (largest |eigenvalue| at each speed: 10, so the relative error is |offset| / 10),
+    the engine's the same but for ``err`` * 10 added to the fourth at speed index ``err_at``."""
+    ref = _lam(np.array(ee.GRID))
+    lam = ref.copy()
+    if err_at is not None:
+        lam[err_at, 3] += 10.0 * err
+    return {"engine": engine, "model": model, "note": note, "speeds": ee.GRID, "lam": lam,
+            "ref_lam": ref, "critical": critical, "ref_critical": ref_critical,
+            "seconds": seconds}
+
+
+def test_check_of_judges_a_value_and_carries_a_declared_difference():
+    v = _ee_value("e", "m", err_at=7, err=4e-10)
+    c = ee.check_of(v, EE_TOL)
+    assert (c.engine, c.model, c.speeds) == ("e", "m", ee.GRID)
+    assert math.isclose(c.error, 4e-10, rel_tol=1e-6) and c.worst_speed == 3.5
+    assert c.speed_range == (0.0, 10.0) and c.passed is True and c.difference == ""
+    assert ee.check_of(v, EE_TOL, "a wider tyre").passed is None
+
+
+EE_VALUES = [
+    {"engine": "B", "model": "bench", "note": "", "speeds": (),
+     "not_run": "not run on this model: no disc"},                          # first: not a stop
+    _ee_value("A", "bench", err_at=7, err=4e-10, ref_critical=(4.25 + 3e-11, 6.5)),   # pass
+    _ee_value("A", "disc", err_at=20, err=2e-6, critical=(None, 6.5),                # FAIL
+              note="disc has drag (cv = 0.8 kg/m): linearized with cv = 0"),
+    {"engine": "C", "model": "bench", "note": "", "speeds": (), "failed": "it broke"},
+    _ee_value("D", "bench", critical=(None, None), ref_critical=(None, None), seconds=2.0,
+              note="a note"),                                                # pass: none on both
+]
+
+
+def test_the_engines_table_cells_and_verdicts():
+    sec, _ = ee.engine_eigenvalues_section(EE_VALUES, EE_TOL)
+    assert sec.title == "Engines' linearizations against the reference's"
+    (table,) = _tables(sec)
+    assert table.header == ("engine", "model", "eigenvalue error (relative)",
+                            "weave speed [m/s] (|difference|)",
+                            "capsize speed [m/s] (|difference|)", "time [s]", "verdict", "why")
+    assert table.rows == (
+        ("B", "bench", "-", "-", "-", "-", "not run", "not run on this model: no disc"),
+        ("A", "bench", "4.0e-10 at 3.5 m/s", "4.2500000000 (3e-11)", "6.5000000000 (0e+00)",
+         "0.12", "pass", ""),
+        ("A", "disc", "2.0e-06 at 10 m/s", "none (-)", "6.5000000000 (0e+00)", "0.12", "FAIL", ""),
+        ("C", "bench", "-", "-", "-", "-", "FAIL", "it broke"),
+        ("D", "bench", "0.0e+00 at 0 m/s", "none (-)", "none (-)", "2.00", "pass", ""))
+
+
+def test_the_engines_rows_not_run_failed_and_judged():
+    sec, _ = ee.engine_eigenvalues_section(EE_VALUES, EE_TOL)
+    rows = [r.as_dict() for r in sec.comparisons]
+    assert len(rows) == 1 + 3 + 3 + 1 + 3          # a not-run and a failed row, 3 per judged
+    for r in rows:
+        assert list(r)[:len(COMMON)] == list(COMMON)
+    skipped, failed = rows[0], rows[7]
+    assert skipped == {"quantity": "eigenvalues: roll/steer eigenvalues",
+                       "scenario": "upright straight running", "model": "bench",
+                       "engines": ["reference", "B"], "max_error": None, "tolerance": 1e-9,
+                       "passed": None, "localized_to": "not run on this model: no disc",
+                       "note": "not run on this model: no disc"}
+    assert failed == {**skipped, "engines": ["reference", "C"], "passed": False,
+                      "localized_to": "it broke", "note": "it broke"}
+    assert [r["passed"] for r in rows] == [None, True, True, True, False, False, True, False,
+                                           True, True, True]
+    a_bench = rows[1:4]
+    assert [r["quantity"] for r in a_bench] == ["eigenvalues: roll/steer eigenvalues",
+                                                "eigenvalues: weave speed",
+                                                "eigenvalues: capsize speed"]
+    assert all(r["scenario"] == "upright straight running" and r["model"] == "bench"
+               and r["engines"] == ["reference", "A"] for r in a_bench)
+    assert math.isclose(a_bench[0]["max_error"], 4e-10, rel_tol=1e-6)
+    assert a_bench[0]["localized_to"] == "v = 3.5 m/s"
+    assert "declared_difference" not in a_bench[0]
+    assert math.isclose(a_bench[1]["max_error"], 3e-11, rel_tol=1e-3)
+    assert rows[4]["localized_to"] == "v = 10 m/s"
+
+
+def test_the_engines_summary_entries():
+    _, summary = ee.engine_eigenvalues_section(EE_VALUES, EE_TOL)
+    assert list(summary) == ["B", "A", "C", "D"]
+    assert summary["B"] == {"bench": {"not_run": "not run on this model: no disc"}}
+    assert summary["C"] == {"bench": {"failed": "it broke"}}
+    a = summary["A"]
+    assert list(a) == ["bench", "disc"]
+    assert list(a["bench"]) == ["max_error", "worst_speed", "weave_speed", "capsize_speed",
+                                "reference_weave_speed", "reference_capsize_speed", "passed",
+                                "seconds"]
+    assert math.isclose(a["bench"]["max_error"], 4e-10, rel_tol=1e-6)
+    assert {k: a["bench"][k] for k in list(a["bench"])[1:]} == {
+        "worst_speed": 3.5, "weave_speed": 4.25, "capsize_speed": 6.5,
+        "reference_weave_speed": 4.25 + 3e-11, "reference_capsize_speed": 6.5,
+        "passed": True, "seconds": 0.123}
+    assert a["disc"]["passed"] is False and a["disc"]["worst_speed"] == 10.0
+    assert a["disc"]["weave_speed"] is None and a["disc"]["reference_weave_speed"] == 4.25
+    assert summary["D"]["bench"]["passed"] is True and summary["D"]["bench"]["seconds"] == 2.0
+
+
+def test_the_engines_text_names_the_tolerances_and_each_note_once():
+    sec, _ = ee.engine_eigenvalues_section(EE_VALUES, EE_TOL)
+    (text,) = _texts(sec)
+    assert "21 speeds 0-10 m/s" in text and "tolerance 1e-09" in text
+    assert "in 0-10 m/s" in text and "within 1e-06 m/s" in text
+    assert text.endswith(" a note; disc has drag (cv = 0.8 kg/m): linearized with cv = 0.")
+    (plain,) = _texts(ee.engine_eigenvalues_section(EE_VALUES[:2], EE_TOL)[0])
+    assert plain.endswith("within 1e-06 m/s.")
+
+
+def _ee_plan(models=(), quick=False):
+    facts = {"reference": SimpleNamespace(spec="reference", name="reference", label="Ref",
+                                          capabilities={"eigenvalues"}),
+             "a.spec": SimpleNamespace(spec="a.spec", name="a", label="Engine A",
+                                       capabilities={"eigenvalues", "runs"}),
+             "x.spec": SimpleNamespace(spec="x.spec", name="x", label="X", capabilities={"runs"}),
+             "b.spec": SimpleNamespace(spec="b.spec", name="b", label="Engine B",
+                                       capabilities={"eigenvalues"})}
+    opts = SimpleNamespace(models=tuple(SimpleNamespace(spec=s) for s in models), quick=quick,
+                           tolerances=EE_TOL, options_for=lambda: {"a.spec": {"k": 1}})
+    from comparisons.stages.stage import Plan
+    return Plan(opts, (), facts)
+
+
+def test_the_engines_stage_asks_one_task_per_model_and_engine_with_the_capability():
+    stage = ee.EngineEigenvaluesStage()
+    assert (stage.name, stage.section) == ("engine-eigenvalues", "eigenvalues")
+    tasks = stage.tasks(_ee_plan(("m1.toml", "m2.toml")))
+    assert [(t.key, t.func, t.args, t.cost, t.label, t.engine) for t in tasks] == [
+        (("a.spec", "m1.toml"), ee.engine_linearization, ("a.spec", {"k": 1}, "m1.toml", "a"),
+         0.5, "m1.toml: eigenvalues of Engine A", "a.spec"),
+        (("b.spec", "m1.toml"), ee.engine_linearization, ("b.spec", {}, "m1.toml", "b"),
+         0.5, "m1.toml: eigenvalues of Engine B", "b.spec"),
+        (("a.spec", "m2.toml"), ee.engine_linearization, ("a.spec", {"k": 1}, "m2.toml", "a"),
+         0.5, "m2.toml: eigenvalues of Engine A", "a.spec"),
+        (("b.spec", "m2.toml"), ee.engine_linearization, ("b.spec", {}, "m2.toml", "b"),
+         0.5, "m2.toml: eigenvalues of Engine B", "b.spec")]
+    assert [t.key for t in stage.tasks(_ee_plan())] == [
+        ("a.spec", "benchmark"), ("b.spec", "benchmark"), ("a.spec", "thesis-disc"),
+        ("b.spec", "thesis-disc")]
+    assert stage.tasks(_ee_plan(("m1.toml",), quick=True)) == []
+
+
+def test_the_engines_stage_assembles_one_section_and_a_failed_task_as_a_failing_row():
+    from comparisons.stages.pool import TaskResult
+    stage, plan = ee.EngineEigenvaluesStage(), _ee_plan()
+    assert stage.assemble(plan, {}).sections == [] and stage.assemble(plan, {}).summary == {}
+    good = _ee_value("a", "bench")
+    out = stage.assemble(plan, {("a.spec", "benchmark"): TaskResult(("a.spec", "benchmark"),
+                                                                     good, 0.1),
+                                ("b.spec", "benchmark"): TaskResult(("b.spec", "benchmark"),
+                                                                     None, 0.1, "boom")})
+    first, second = out.sections
+    assert first.title == "Engines' linearizations against the reference's"
+    assert [r["passed"] for r in first.comparisons] == [True, True, True]
+    assert list(out.summary) == ["engine_eigenvalues"]
+    assert out.summary["engine_eigenvalues"]["a"]["bench"]["passed"] is True
+    assert second.title == "Eigenvalues of Engine B"
+    assert [(r["passed"], r["localized_to"]) for r in second.comparisons] == [(False, "boom")]
+    only_failed = stage.assemble(plan, {("b.spec", "m"): TaskResult(("b.spec", "m"), None, 0.1,
+                                                                      "boom")})
+    assert [s.title for s in only_failed.sections] == ["Eigenvalues of Engine B"]
+    assert only_failed.summary == {}
+
+
+# -- the option studies (comparisons/stages/option_study.py) --------------------------------
+
+from comparisons.stages import option_study as os_  # noqa: E402
+
+
+def test_the_option_studys_figure_grid_and_default_model():
+    """docs: the figure's 0.1 m/s grid over 0-10 m/s (101 speeds, the ends included), the
+    benchmark by default."""
+    assert len(os_.CURVE) == 101 and os_.CURVE[0] == 0.0 and os_.CURVE[-1] == 10.0
+    assert all(v == round(0.1 * k, 10) for k, v in enumerate(os_.CURVE))
+    assert os_.DEFAULT_MODEL == "benchmark"
+
+
+def test_an_option_value_is_the_engine_built_with_that_value(fake_load):
+    """The engine built with the run's options and the option set to the value (overriding
+    the run's); its eigenvalues on both grids, the reference's on both (here the engine is
+    the reference's own eigenvalues: critical speeds within 1e-10 m/s of two root finders)."""
+    from reference_model import load_model
+    fake_load.result = lambda model: _FakeEngine(lam=model.eigenvalues)
+    v = os_.option_value("s.spec", {"k": 1, "crown": 9.0}, "crown", 0.01, "thesis-disc")
+    ((spec, model, options),) = fake_load.calls
+    assert spec == "s.spec" and options == {"k": 1, "crown": 0.01}
+    assert model.params == load_model("thesis-disc").params.replace(cv=0.0)
+    assert set(v) == {"value", "model", "note", "speeds", "lam", "curve", "critical", "seconds",
+                      "ref_lam", "ref_curve", "ref_critical"}
+    assert v["value"] == 0.01 and type(v["value"]) is float
+    assert v["model"] == "thesis-disc" and v["speeds"] == ee.GRID
+    assert v["note"] == "thesis-disc has drag (cv = 0.8 kg/m): linearized with cv = 0"
+    assert np.array_equal(v["lam"], model.eigenvalues(np.array(ee.GRID)))
+    assert np.array_equal(v["curve"], model.eigenvalues(np.array(os_.CURVE)))
+    assert np.array_equal(v["ref_lam"], v["lam"]) and np.array_equal(v["ref_curve"], v["curve"])
+    for mine, ref in zip(v["critical"], v["ref_critical"]):
+        assert (mine is None and ref is None) or abs(mine - ref) < 1e-10
+    assert 0.0 <= v["seconds"] < 5.0
+    assert type(os_.option_value("s", {}, "crown", 1, "benchmark")["value"]) is float
+
+
+def test_an_option_value_the_engine_cannot_build_is_not_run(fake_load):
+    from engines import UnsupportedModel
+    from engines.base import CapabilityError
+    for exc in (UnsupportedModel("no torus"), CapabilityError("no torus")):
+        fake_load.result = exc
+        assert os_.option_value("s", {}, "crown", 0.02, "benchmark") == {
+            "value": 0.02, "model": "benchmark", "note": "", "speeds": ee.GRID,
+            "not_run": "not run on this model: no torus"}
+
+
+def _os_value(x, err_at=None, err=0.0, critical=(4.0, 6.25), ref_critical=(4.0, 6.25),
+              note=""):
+    """A hand-built `option_value`: `_ee_value`'s eigenvalues (relative error ``err`` at speed
+    index ``err_at``) and a figure curve: the reference's `_lam` on CURVE plus ``x`` (so each
+    value's curve is told apart)."""
+    v = _ee_value("unused", "bench", err_at, err, critical, ref_critical, 0.3, note)
+    curve = _lam(np.array(os_.CURVE))
+    return {"value": x, "model": "bench", "note": note, "speeds": ee.GRID, "lam": v["lam"],
+            "ref_lam": v["ref_lam"], "curve": curve + x, "ref_curve": curve,
+            "critical": critical, "ref_critical": ref_critical, "seconds": 0.3}
+
+
+def _study(**kw):
+    from engines.facts import OptionStudy
+    args = dict(option="crown_radius", quantity="crown radius", unit="m",
+                values=(0.0, 0.01, 0.02), reference_value=0.0, difference="a torus",
+                why="the tyres' range")
+    return OptionStudy(**{**args, **kw})
+
+
+SYM = SimpleNamespace(name="sym b", label="SymB", spec="sym.spec", capabilities={"eigenvalues"},
+                      contacts=("knife-edge",))
+
+OS_VALUES = [
+    _os_value(0.0, err_at=4, err=3e-10, ref_critical=(4.0, 6.25 + 2e-7),
+              note="bench has drag (cv = 0.8 kg/m): linearized with cv = 0"),   # judged: pass
+    _os_value(0.01, err_at=20, err=2.5e-3, critical=(3.9, 6.0)),                 # reported
+    {"value": 0.02, "model": "bench", "note": "", "speeds": ee.GRID,
+     "not_run": "not run on this model: no torus"},
+]
+
+
+def test_the_option_studys_table():
+    sec, _ = os_.option_study_section(SYM, _study(), "bench", OS_VALUES, EE_TOL)
+    assert sec.title == "Option study: SymB's crown radius on bench"
+    (table,) = _tables(sec)
+    assert table.header == ("crown radius [m]", "eigenvalues vs reference (relative)",
+                            "weave speed [m/s]", "shift [m/s]", "capsize speed [m/s]",
+                            "shift [m/s]", "verdict")
+    # shifts: 0 -> '+0e+00'; -2e-7 (below 5e-7: its size) -> '-2e-07'; -0.1 and -0.25 m/s
+    assert table.rows == (
+        ("0", "3.00e-10", "4.000000", "+0e+00", "6.250000", "-2e-07", "pass"),
+        ("0.01", "2.50e-03", "3.900000", "-0.100000", "6.000000", "-0.250000",
+         "reported: model difference"),
+        ("0.02", "-", "-", "-", "-", "-", "not run"))
+    assert "0-10 m/s" in table.note
+
+
+def test_a_shift_of_a_critical_speed_keeps_six_decimals_down_to_half_a_micrometre_per_second():
+    assert os_._shift(4.000002, 4.0) == "+0.000002"
+    # exactly 5e-7 (the float 4.99999999999999977e-7): 6 decimals, which round it down
+    assert os_._shift(5e-7, 0.0) == "+0.000000"
+    assert os_._shift(4.0, 4.0000004) == "-4e-07"      # under 5e-7: its size
+    assert os_._shift(None, 4.0) == os_._shift(4.0, None) == "-"
+    assert os_._speed(None) == "none" and os_._speed(1.23456789) == "1.234568"
+
+
+def test_the_option_studys_rows_judge_the_reference_value_and_report_the_others():
+    sec, _ = os_.option_study_section(SYM, _study(), "bench", OS_VALUES, EE_TOL)
+    rows = [r.as_dict() for r in sec.comparisons]
+    assert len(rows) == 3 + 3 + 1
+    for r in rows:
+        assert list(r)[:len(COMMON)] == list(COMMON)
+        assert r["model"] == "bench" and r["engines"] == ["reference", "sym b"]
+    assert [r["passed"] for r in rows] == [True, True, True, None, None, None, None]
+    assert [r["quantity"] for r in rows[:3]] == [
+        "option study crown_radius: roll/steer eigenvalues", "option study crown_radius: "
+        "weave speed", "option study crown_radius: capsize speed"]
+    assert [r["scenario"] for r in rows] == ["crown_radius = 0 m"] * 3 + \
+        ["crown_radius = 0.01 m"] * 3 + ["crown_radius = 0.02 m"]
+    assert all((r["option"], r["value"]) == ("crown_radius", 0.0) for r in rows[:3])
+    assert all((r["option"], r["value"]) == ("crown_radius", 0.01) for r in rows[3:6])
+    assert all("declared_difference" not in r for r in rows[:3])
+    assert all(r["declared_difference"] == "crown_radius = 0.01 m: a torus" for r in rows[3:6])
+    assert math.isclose(rows[0]["max_error"], 3e-10, rel_tol=1e-6)
+    assert math.isclose(rows[3]["max_error"], 2.5e-3, rel_tol=1e-9)
+    assert rows[6] == {"quantity": "option study crown_radius: roll/steer eigenvalues",
+                       "scenario": "crown_radius = 0.02 m", "model": "bench",
+                       "engines": ["reference", "sym b"], "max_error": None, "tolerance": None,
+                       "passed": None, "localized_to": "not run on this model: no torus",
+                       "note": "not run on this model: no torus"}
+    # the reference value out of tolerance fails: 2e-9 relative against 1e-9
+    bad = [_os_value(0.0, err_at=3, err=2e-9), OS_VALUES[1]]
+    sec, summary = os_.option_study_section(SYM, _study(), "bench", bad, EE_TOL)
+    assert sec.comparisons[0]["passed"] is False and _tables(sec)[0].rows[0][-1] == "FAIL"
+    assert summary["values"][0]["passed"] is False
+
+
+def test_the_option_studys_summary_entry():
+    _, summary = os_.option_study_section(SYM, _study(), "bench", OS_VALUES, EE_TOL)
+    first, second, third = summary.pop("values")
+    assert summary == {"engine": "sym b", "option": "crown_radius", "unit": "m", "model": "bench",
+                       "reference_value": 0.0, "reference_weave_speed": 4.0,
+                       "reference_capsize_speed": 6.25 + 2e-7}
+    assert math.isclose(first.pop("eigenvalue_distance"), 3e-10, rel_tol=1e-6)
+    assert first == {"value": 0.0, "weave_speed": 4.0, "capsize_speed": 6.25, "passed": True,
+                     "declared_difference": None}
+    assert math.isclose(second.pop("eigenvalue_distance"), 2.5e-3, rel_tol=1e-9)
+    assert second == {"value": 0.01, "weave_speed": 3.9, "capsize_speed": 6.0, "passed": None,
+                      "declared_difference": "crown_radius = 0.01 m: a torus"}
+    assert third == {"value": 0.02, "not_run": "not run on this model: no torus"}
+
+
+def test_the_option_studys_figure_of_the_values_that_ran():
+    sec, _ = os_.option_study_section(SYM, _study(), "bench", OS_VALUES, EE_TOL)
+    (fig,) = sec.figures
+    assert (fig.name, fig.kind) == ("option_study_sym-b_crown_radius_bench.png", "option_study")
+    d = fig.data
+    assert set(d) == {"engine", "label", "quantity", "unit", "values", "reference_value", "v",
+                      "re", "ref_re", "critical", "ref_critical", "model"}
+    assert (d["engine"], d["label"], d["quantity"], d["unit"], d["model"]) == (
+        "sym b", "SymB", "crown radius", "m", "bench")
+    assert d["values"] == [0.0, 0.01] and d["reference_value"] == 0.0
+    assert np.array_equal(d["v"], os_.CURVE)
+    curve = _lam(np.array(os_.CURVE)).real
+    assert d["re"].shape == (2, 101, 4)
+    assert np.array_equal(d["re"][0], curve) and np.array_equal(d["re"][1], curve + 0.01)
+    assert np.array_equal(d["ref_re"], curve)
+    assert d["critical"] == [(4.0, 6.25), (3.9, 6.0)] and d["ref_critical"] == (4.0, 6.25 + 2e-7)
+    assert fig.caption
+    # nothing ran: no figure, no reference speeds
+    sec, summary = os_.option_study_section(SYM, _study(), "bench", OS_VALUES[2:], EE_TOL)
+    assert sec.figures == [] and (summary["reference_weave_speed"],
+                                  summary["reference_capsize_speed"]) == (None, None)
+
+
+def test_the_option_studys_text_names_the_values_and_the_first_values_note():
+    sec, _ = os_.option_study_section(SYM, _study(), "bench", OS_VALUES, EE_TOL)
+    (text,) = _texts(sec)
+    assert text.startswith("`crown_radius` = 0 m is the reference's bicycle; any other value "
+                           "is a declared model difference: a torus. Values 0, 0.01, 0.02 m "
+                           "(the tyres' range). At 0 m ")
+    assert text.endswith(" bench has drag (cv = 0.8 kg/m): linearized with cv = 0.")
+    (plain,) = _texts(os_.option_study_section(SYM, _study(why=""), "bench", OS_VALUES[1:],
+                                               EE_TOL)[0])
+    assert "Values 0, 0.01, 0.02 m. At 0 m " in plain and plain.endswith("quantify the difference.")
+    (empty,) = _texts(os_.option_study_section(SYM, _study(), "bench", [], EE_TOL)[0])
+    assert empty.endswith("quantify the difference.")
+
+
+def _os_plan(models=(), quick=False, studies=None):
+    """A plan with engine 'sym' (eigenvalues, a crown study, the knife-edge contact), 'plain'
+    (eigenvalues, no study) and 'runs' (a study but no eigenvalues)."""
+    studies = (_study(),) if studies is None else studies
+    facts = {"reference": SimpleNamespace(spec="reference", capabilities={"eigenvalues"},
+                                          option_studies=studies),
+             "sym.spec": SimpleNamespace(**{**vars(SYM), "option_studies": studies}),
+             "plain": SimpleNamespace(spec="plain", name="plain", label="Plain",
+                                      capabilities={"eigenvalues"}, option_studies=()),
+             "runs": SimpleNamespace(spec="runs", name="runs", label="Runs",
+                                     capabilities={"runs"}, option_studies=studies)}
+    opts = SimpleNamespace(models=tuple(models), quick=quick, tolerances=EE_TOL,
+                           options_for=lambda: {"sym.spec": {"k": 1}})
+    from comparisons.stages.stage import Plan
+    return Plan(opts, (), facts)
+
+
+def test_the_option_study_stage_asks_one_task_per_value_and_model_it_models():
+    stage = os_.OptionStudyStage()
+    assert (stage.name, stage.section) == ("option-study", "option-study")
+    tasks = stage.tasks(_os_plan())
+    assert [(t.key, t.func, t.args, t.cost, t.label, t.engine) for t in tasks] == [
+        (("sym.spec", "crown_radius", "benchmark", x), os_.option_value,
+         ("sym.spec", {"k": 1}, "crown_radius", x, "benchmark"), 0.4,
+         f"benchmark: SymB at crown_radius = {x:g} m", "sym.spec") for x in (0.0, 0.01, 0.02)]
+    models = (SimpleNamespace(spec="k.toml", name="K", contact="knife-edge"),
+              SimpleNamespace(spec="t.toml", name="T", contact="torus"))
+    assert [t.key[2:] for t in stage.tasks(_os_plan(models))] == [
+        ("k.toml", 0.0), ("k.toml", 0.01), ("k.toml", 0.02)]
+    assert stage._models(_os_plan(models), SYM) == (["k.toml"], [models[1]])
+    assert stage._models(_os_plan(), SYM) == (["benchmark"], [])
+    # --quick: only the declared quick values, and no study without them
+    assert stage.tasks(_os_plan(quick=True)) == []
+    quick = _os_plan(quick=True, studies=(_study(quick_values=(0.0,)),))
+    assert [t.key[3] for t in stage.tasks(quick)] == [0.0]
+
+
+def test_the_option_study_stage_prepares_each_running_study_once():
+    calls = []
+    stage = os_.OptionStudyStage()
+    stage.prepare(_os_plan(studies=(_study(prepare=lambda: calls.append("crown")),
+                                    _study(option="other"))))
+    assert calls == ["crown"]          # the study of 'runs' (no eigenvalues) is not prepared
+    stage.prepare(_os_plan(quick=True, studies=(_study(prepare=lambda: calls.append("q")),)))
+    assert calls == ["crown"]
+
+
+def test_the_option_study_stage_assembles_per_model_failures_and_contacts_it_does_not_model():
+    from comparisons.stages.pool import TaskResult
+    models = (SimpleNamespace(spec="k.toml", name="K", contact="knife-edge"),
+              SimpleNamespace(spec="t.toml", name="T", contact="torus"))
+    plan, stage = _os_plan(models), os_.OptionStudyStage()
+    results = {}
+    for x, v in zip((0.0, 0.01), OS_VALUES):
+        key = ("sym.spec", "crown_radius", "k.toml", x)
+        results[key] = TaskResult(key, v, 0.3)
+    bad = ("sym.spec", "crown_radius", "k.toml", 0.02)
+    results[bad] = TaskResult(bad, None, 0.3, "boom")
+    other = ("sym.spec", "other_option", "k.toml", 0.0)     # not a study of this plan
+    results[other] = TaskResult(other, None, 0.3, "ignored")
+    out = stage.assemble(plan, results)
+    study, failed, limitation = out.sections
+    assert study.title == "Option study: SymB's crown radius on bench"
+    assert [r["passed"] for r in study.comparisons] == [True, True, True, None, None, None]
+    assert failed.title == "Option study: SymB at crown_radius = 0.02 m"
+    assert [(r["passed"], r["localized_to"]) for r in failed.comparisons] == [(False, "boom")]
+    why = "not run on this model: SymB models the front contact(s) knife-edge, not 'torus'"
+    assert limitation.title == "Option study: SymB's crown radius on T"
+    assert _texts(limitation) == [why + "."]
+    assert [r.as_dict() for r in limitation.comparisons] == [{
+        "quantity": "option study crown_radius: roll/steer eigenvalues", "scenario": "-",
+        "model": "T", "engines": ["reference", "sym b"], "max_error": None, "tolerance": None,
+        "passed": None, "localized_to": why, "note": why}]
+    (entry,) = out.summary["option_studies"]
+    assert entry["engine"] == "sym b" and [e["value"] for e in entry["values"]] == [0.0, 0.01]
+    # two models that ran: a section each, in the order their results came
+    two = {("sym.spec", "crown_radius", m, 0.0): TaskResult(None, OS_VALUES[0], 0.3)
+           for m in ("b.toml", "a.toml")}
+    out = stage.assemble(_os_plan(), two)
+    assert len(out.sections) == 2 and len(out.summary["option_studies"]) == 2
+    assert stage.assemble(_os_plan(), {}).summary == {}
+    only_failed = stage.assemble(_os_plan(), {bad: TaskResult(bad, None, 0.3, "boom")})
+    assert [s.title for s in only_failed.sections] == ["Option study: SymB at crown_radius = 0.02 m"]
+    assert only_failed.summary == {}
