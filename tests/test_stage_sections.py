@@ -722,3 +722,256 @@ def test_the_option_study_stage_assembles_per_model_failures_and_contacts_it_doe
     only_failed = stage.assemble(_os_plan(), {bad: TaskResult(bad, None, 0.3, "boom")})
     assert [s.title for s in only_failed.sections] == ["Option study: SymB at crown_radius = 0.02 m"]
     assert only_failed.summary == {}
+
+
+# -- a section's blocks and cells (comparisons/stages/results.py) ---------------------------
+
+def test_a_sections_blocks_keep_their_order_and_cells_become_text():
+    from comparisons.stages.results import Figure, Heading, Section
+    sec = Section("T")
+    assert (sec.blocks, sec.comparisons, sec.seconds) == ([], [], 0.0)
+    sec.text("one", "two")
+    sec.heading("H")
+    sec.table(["a", "b"], [[1, None], (2.5, "x")], note="how to read it")
+    sec.figure("f.png", "kind", "a caption", x=[1, 2], y="z")
+    sec.table(("c",), ())
+    assert sec.blocks[:3] == [Text("one"), Text("two"), Heading("H")]
+    table = sec.blocks[3]
+    assert table == Table(("a", "b"), (("1", "None"), ("2.5", "x")), "how to read it")
+    assert type(table.header) is tuple and all(type(r) is tuple for r in table.rows)
+    assert sec.blocks[4] == Figure("f.png", "kind", {"x": [1, 2], "y": "z"}, "a caption")
+    assert sec.blocks[5] == Table(("c",), (), "")
+    assert sec.figures == [sec.blocks[4]]
+    sec.figure("g.png", "other")
+    assert [f.name for f in sec.figures] == ["f.png", "g.png"] and sec.figures[1].caption == ""
+    assert Section("U").figures == [] and Section("U").blocks is not Section("V").blocks
+
+
+def test_verdict_words_and_number_cells():
+    from comparisons.stages.results import FIGURE_POLICIES, num, verdict_word
+    assert [verdict_word(p) for p in (True, False, None)] == ["pass", "FAIL", "reported"]
+    assert verdict_word(None, "a declared difference") == "reported: a declared difference"
+    assert verdict_word(False, "x") == "FAIL: x" and verdict_word(True, "") == "pass"
+    assert num(None) == "-" and num(0.000123) == "1.2e-04" and num(2.0, ".3f") == "2.000"
+    assert FIGURE_POLICIES == ("all", "failing", "none")
+
+
+# -- the stage base (comparisons/stages/stage.py) -------------------------------------------
+
+def test_a_plan_reads_the_runs_options():
+    from comparisons.stages.stage import Plan
+    opts = SimpleNamespace(tolerances="TOLS", quick=True, sections=("faults", "eigenvalues"),
+                           options_for=lambda: {"a": {"k": 1}})
+    facts = {"a": SimpleNamespace(n=1), "reference": SimpleNamespace(n=0),
+             "b": SimpleNamespace(n=2)}
+    plan = Plan(opts, ("s",), facts)
+    assert (plan.cases, plan.critical) == ((), {})
+    assert plan.tolerances == "TOLS" and plan.quick is True
+    assert plan.wants(None) and plan.wants("faults") and not plan.wants("option-study")
+    assert plan.engines() == [facts["a"], facts["b"]]          # the reference excluded
+    assert plan.engines(lambda f: f.n == 2) == [facts["b"]]
+    assert plan.options_for("a") == {"k": 1} and plan.options_for("b") == {}
+
+
+def test_a_failed_stage_is_a_section_with_one_failing_row():
+    from comparisons.stages.stage import failed_section
+    sec = failed_section("Title", "ValueError: boom")
+    assert sec.title == "Title"
+    assert _texts(sec) == ["**This stage failed**: ValueError: boom"]
+    assert [r.as_dict() for r in sec.comparisons] == [{
+        "quantity": "stage", "scenario": "Title", "model": "-", "engines": ["-"],
+        "max_error": None, "tolerance": None, "passed": False,
+        "localized_to": "ValueError: boom", "note": ""}]
+
+
+def test_the_stage_bases_defaults():
+    from comparisons.stages.pool import TaskResult
+    from comparisons.stages.stage import Assembled, Stage
+    s = Stage()
+    assert (s.name, s.section) == ("stage", None)
+    assert s.tasks(None) == [] and s.prepare(None) is None
+    out = s.assemble(None, {})
+    assert (out.sections, out.faults, out.summary) == ([], [], {})
+    assert Assembled().sections is not Assembled().sections
+    claims = [{"claim": 1}]
+    assert s.revise_claims(None, {}, claims) is claims
+    ok = {"k": TaskResult("k", "value", 0.1), "bad": TaskResult("bad", None, 0.1, "boom")}
+    assert Stage.value(ok, "k", "T") == ("value", None)
+    value, sec = Stage.value(ok, "bad", "T")
+    assert value is None and sec.title == "T" and sec.comparisons[0]["localized_to"] == "boom"
+
+
+# -- term by term (comparisons/stages/terms.py) ---------------------------------------------
+
+from comparisons.judgments.terms import TermComparison  # noqa: E402
+from comparisons.stages import terms as tm  # noqa: E402
+
+TERMS = [TermComparison("mass_matrix", ("reference", "x"), 2.0e-10, 1.0e-9, 1e-8, True, 3,
+                        "M[theta, gamma]", 50),
+         TermComparison("gravity", ("reference", "x"), 3.0e-6, 2.0e-5, 1e-8, False, 7,
+                        "Qgrav[phi]", 50)]
+
+
+def test_the_term_tables_header_and_defaults():
+    assert tm.TERM_HEADER == ("model", "quantity", "max error", "tolerance", "verdict",
+                              "worst entry")
+    assert tm.THESIS_MODELS == ("thesis", "thesis-disc")
+    assert (tm.N_STATES, tm.QUICK_N_STATES) == (200, 50)
+    assert tm.plugin_terms is tm.engine_terms
+
+
+def test_term_rows_are_table_rows_and_comparisons():
+    from comparisons.stages.results import Section
+    sec = Section("s")
+    rows = tm.term_rows(sec, TERMS, "bike", ["reference", "X"], "random-states-50", ("bike",))
+    assert rows == [("bike", "mass_matrix", "2.0e-10", "1e-08", "pass", "M[theta, gamma]"),
+                    ("bike", "gravity", "3.0e-06", "1e-08", "FAIL", "Qgrav[phi]")]
+    assert [r.as_dict() for r in sec.comparisons] == [
+        {"quantity": q, "scenario": "random-states-50", "model": "bike",
+         "engines": ["reference", "X"], "max_error": e, "tolerance": 1e-8, "passed": p,
+         "localized_to": w, "note": ""}
+        for q, e, p, w in (("mass_matrix", 2.0e-10, True, "M[theta, gamma]"),
+                           ("gravity", 3.0e-6, False, "Qgrav[phi]"))]
+    assert tm.term_rows(Section("t"), TERMS[:1], "m", ["a", "b"], "s")[0][0] == "mass_matrix"
+
+
+class _TermsEngine:
+    """The reference's mass matrix plus 0.5 at M[phi, theta] (a planted error of known size)."""
+
+    def __init__(self, ref, caps=("mass_matrix",), broken=False):
+        self._ref, self.caps, self.broken = ref, set(caps), broken
+
+    def supports(self, cap):
+        return cap in self.caps
+
+    def mass_matrix(self, q):
+        if self.broken:
+            raise RuntimeError("no M today")
+        M = np.array(self._ref.mass_matrix(q), dtype=float)
+        M[:, 2, 3] += 0.5
+        return M
+
+
+@pytest.fixture
+def terms_env(monkeypatch):
+    """`engine_terms` with its engines and `compare_terms` replaced: per model name, an
+    exception to raise or an engine maker; `compare_terms` returns `TERMS` (with the calls
+    recorded)."""
+    real = tm.load_engine
+    env = SimpleNamespace(per_model={}, loads=[], compares=[])
+
+    def load(spec, model, **options):
+        env.loads.append((spec, model.name, options))
+        if spec == "reference":
+            return real("reference", model)
+        what = env.per_model[model.name]
+        if isinstance(what, Exception):
+            raise what
+        return what(real("reference", model))
+
+    def compare(ref, eng, states, tolerances):
+        env.compares.append((ref, eng, len(states), tolerances))
+        return TERMS
+
+    monkeypatch.setattr(tm, "load_engine", load)
+    monkeypatch.setattr(tm, "compare_terms", compare)
+    return env
+
+
+TERM_TOL = {"mass_matrix": SimpleNamespace(tolerance=1e-8)}
+
+
+def test_engine_terms_rows_not_run_failed_and_the_mass_matrix_figure(terms_env):
+    from engines import UnsupportedModel
+    terms_env.per_model = {"thesis": UnsupportedModel("no toroidal tyre"),
+                           "thesis-disc": _TermsEngine}
+    sec = tm.engine_terms(TERM_TOL, "pinocchio", {"k": 1}, 5)
+    assert sec.title == "Reference vs Pinocchio, term by term"
+    assert [(s, m, o) for s, m, o in terms_env.loads if s != "reference"] == [
+        ("pinocchio", "thesis", {"k": 1}), ("pinocchio", "thesis-disc", {"k": 1})]
+    assert [n for _, _, n, _ in terms_env.compares] == [5]
+    assert terms_env.compares[0][3] is TERM_TOL
+    (table,) = _tables(sec)
+    assert table.header == tm.TERM_HEADER
+    assert table.rows == (
+        ("thesis", "-", "-", "-", "not run", "not run on this model: no toroidal tyre"),
+        ("thesis-disc", "mass_matrix", "2.0e-10", "1e-08", "pass", "M[theta, gamma]"),
+        ("thesis-disc", "gravity", "3.0e-06", "1e-08", "FAIL", "Qgrav[phi]"))
+    assert [(r["scenario"], r["model"], r["engines"]) for r in sec.comparisons] == [
+        ("random-states-5", "thesis-disc", ["reference", "pinocchio"])] * 2
+    assert "at 5 deterministic states" in _texts(sec)[0] and "{'k': 1}" in _texts(sec)[0]
+    (fig,) = sec.figures
+    assert (fig.name, fig.kind) == ("mass_matrix_error_pinocchio_thesis-disc.png", "matrix_error")
+    assert set(fig.data) == {"relative", "labels", "tolerance", "title", "colorbar"}
+    from comparisons.judgments.terms import random_states
+    from reference_model import load_model
+    M = load_model("thesis-disc").mass_matrix(random_states(5, seed=7).q)
+    expected = np.zeros((8, 8))
+    expected[2, 3] = 0.5 / np.abs(M).max()       # the planted 0.5 over the largest |M|
+    np.testing.assert_allclose(fig.data["relative"], expected, rtol=1e-9, atol=1e-15)
+    assert fig.data["labels"] == list(COORDINATES_) and fig.data["tolerance"] == 1e-8
+    assert fig.data["title"] == ("mass matrix: reference vs Pinocchio on thesis-disc, max over "
+                                 "the states")
+    assert fig.data["colorbar"] == "log10 max |M_ref - M_engine| / max|M|"
+
+
+COORDINATES_ = ("xc", "yc", "phi", "theta", "psi", "beta", "gamma", "eps")
+
+
+def test_engine_terms_on_a_users_model_a_failed_build_and_no_figure_without_m(terms_env):
+    terms_env.per_model = {"benchmark": RuntimeError("it   broke\n badly"),
+                           "thesis": _TermsEngine}
+    sec = tm.engine_terms(TERM_TOL, "pinocchio", {}, 3, ("benchmark", "thesis"))
+    assert sec.title == "Reference vs Pinocchio on benchmark, thesis, term by term"
+    assert not _texts(sec)[0].startswith("`pinocchio` with")
+    assert _tables(sec)[0].rows[0] == ("benchmark", "-", "-", "-", "FAIL",
+                                       "RuntimeError: it broke badly")
+    assert sec.comparisons[0].as_dict() == {
+        "quantity": "engine build", "scenario": "-", "model": "benchmark",
+        "engines": ["pinocchio"], "max_error": None, "tolerance": None, "passed": False,
+        "localized_to": "RuntimeError: it broke badly", "note": ""}
+    (fig,) = sec.figures           # on the thesis model: no model suffix
+    assert fig.name == "mass_matrix_error_pinocchio.png"
+    long = RuntimeError("y" * 400)
+    terms_env.per_model = {"benchmark": long}
+    sec = tm.engine_terms(TERM_TOL, "pinocchio", {}, 3, ("benchmark",))
+    assert sec.comparisons[0]["localized_to"] == "RuntimeError: " + "y" * 300
+    assert sec.figures == []                      # nothing built
+    for engine in (lambda ref: _TermsEngine(ref, caps=()),            # no M declared
+                   lambda ref: _TermsEngine(ref, broken=True)):       # M raises: no figure
+        terms_env.per_model = {"benchmark": engine}
+        sec = tm.engine_terms(TERM_TOL, "pinocchio", {}, 3, ("benchmark",))
+        assert sec.figures == [] and len(sec.comparisons) == 2
+
+
+def test_the_terms_stage_tasks_and_titles():
+    from comparisons.stages.pool import TaskResult
+    from comparisons.stages.stage import Plan
+    facts = {"reference": SimpleNamespace(spec="reference", has_terms=True),
+             "p.spec": SimpleNamespace(spec="p.spec", label="P", has_terms=True,
+                                       costs=SimpleNamespace(terms=1.5)),
+             "r.spec": SimpleNamespace(spec="r.spec", label="R", has_terms=False)}
+    models = (SimpleNamespace(spec="m.toml", name="M"),)
+    opts = lambda models, quick: SimpleNamespace(   # noqa: E731
+        models=models, quick=quick, tolerances="TOLS", options_for=lambda: {"p.spec": {"k": 1}})
+    stage = tm.TermsStage()
+    assert (stage.name, stage.section) == ("terms", "terms")
+    (t,) = stage.tasks(Plan(opts((), False), (), facts))
+    assert (t.key, t.func, t.args, t.cost, t.label, t.engine) == (
+        ("p.spec", None), tm.engine_terms, ("TOLS", "p.spec", {"k": 1}, 200), 1.5,
+        "P term by term", "p.spec")
+    (t,) = stage.tasks(Plan(opts(models, True), (), facts))
+    assert (t.key, t.args, t.label) == (("p.spec", "m.toml"),
+                                        ("TOLS", "p.spec", {"k": 1}, 50, ("m.toml",)),
+                                        "P term by term on M")
+    plan = Plan(opts(models, False), (), facts)
+    ok = tm.Section("fine")
+    out = stage.assemble(plan, {("p.spec", None): TaskResult(None, ok, 0.1),
+                                ("p.spec", "m.toml"): TaskResult(None, None, 0.1, "boom"),
+                                ("p.spec", "x.toml"): TaskResult(None, None, 0.1, "bang")})
+    assert out.sections[0] is ok
+    assert [s.title for s in out.sections[1:]] == ["M: reference vs P, term by term",
+                                                   "x.toml: reference vs P, term by term"]
+    assert out.sections[1].comparisons[0]["localized_to"] == "boom"
+    out = stage.assemble(plan, {("p.spec", None): TaskResult(None, None, 0.1, "boom")})
+    assert out.sections[0].title == "Reference vs P, term by term"
