@@ -975,3 +975,169 @@ def test_the_terms_stage_tasks_and_titles():
     assert out.sections[1].comparisons[0]["localized_to"] == "boom"
     out = stage.assemble(plan, {("p.spec", None): TaskResult(None, None, 0.1, "boom")})
     assert out.sections[0].title == "Reference vs P, term by term"
+
+
+# -- fault injection (comparisons/stages/faults.py) -----------------------------------------
+
+from comparisons.judgments.faults import FaultResult  # noqa: E402
+from comparisons.stages import faults as fl  # noqa: E402
+
+
+def _fault(name, detected, correct, observable):
+    return FaultResult(name, detected, f"{name} here", f"{name} expected", correct, f"{name} ev",
+                       ("reference", "x"), ("M[phi, phi]",), 0.99, observable)
+
+
+FAULTS = [_fault("right", True, True, True), _fault("hidden", False, False, False),
+          _fault("wrong place", True, False, True), _fault("missed", False, False, True)]
+
+
+def test_the_term_quantities_localization_reads():
+    assert fl.TERM_QUANTITIES == ("mass_matrix", "inverse_dynamics", "gravity",
+                                  "generalized_forces", "constraint_jacobian", "constraint_bias",
+                                  "forward_acceleration", "torques", "multipliers")
+
+
+def test_faults_go_into_the_thesis_bicycle_or_its_disc_variant():
+    # engines/facts.py: Pinocchio models both front contacts, Kane only the disc
+    assert fl.fault_base("pinocchio") == "thesis" and fl.fault_base("kane") == "thesis-disc"
+
+
+@pytest.fixture
+def suite(monkeypatch):
+    calls = []
+
+    def run(**kw):
+        calls.append(kw)
+        if isinstance(suite.result, Exception):
+            raise suite.result
+        return suite.result
+
+    suite = SimpleNamespace(calls=calls, result=FAULTS)
+    monkeypatch.setattr(fl, "run_fault_suite", run)
+    return suite
+
+
+def test_fault_entries_verdicts_engine_and_model(suite):
+    entries = fl.fault_entries("TOLS", "kane", None, (("k", 1),))
+    assert suite.calls == [{"engines": ("kane",), "base": "thesis-disc", "tolerances": "TOLS",
+                            "options": {"kane": {"k": 1}}}]
+    assert [e["verdict"] for e in entries] == ["localized", "not observable",
+                                               "detected, mislocalized", "missed"]
+    assert all(e["engine"] == "kane" and e["model"] == "thesis-disc" for e in entries)
+    assert {k: v for k, v in entries[0].items() if k not in ("engine", "model", "verdict")} == \
+        FAULTS[0].to_dict()
+    fl.fault_entries("TOLS", "pkg.mod:MyEngine", "benchmark")
+    assert suite.calls[-1]["base"] == "benchmark" and suite.calls[-1]["options"] == {
+        "pkg.mod:MyEngine": {}}
+    assert fl.fault_entries("TOLS", "pkg.mod:MyEngine", "benchmark")[0]["engine"] == "MyEngine"
+
+
+def test_a_model_the_engine_cannot_represent_is_one_not_run_entry(suite):
+    from engines import UnsupportedModel
+    suite.result = UnsupportedModel("no torus")
+    assert fl.fault_entries("TOLS", "pkg:E", "benchmark") == [{
+        "fault": "-", "engine": "E", "model": "benchmark", "detected": None,
+        "localized_to": "-", "expected": "-", "correct": None, "observable": False,
+        "evidence": "not run on this model: no torus", "verdict": "not run"}]
+
+
+def test_the_fault_table():
+    entries = [{"fault": "f1", "engine": "E", "model": "thesis", "detected": True,
+                "localized_to": "M", "expected": "M", "verdict": "localized", "evidence": "ev"},
+               {"fault": "f2", "engine": "E", "model": "bench", "detected": False,
+                "localized_to": "-", "expected": "Qv", "verdict": "missed", "evidence": "ev2"},
+               {"fault": "-", "engine": "F", "detected": None, "localized_to": "-",
+                "expected": "-", "verdict": "not run", "evidence": "why"}]
+    sec = fl.fault_section(entries)
+    assert sec.title == "Fault injection: does the harness catch a broken model?"
+    (table,) = _tables(sec)
+    assert table.header == ("fault", "engine", "detected", "localized to", "expected", "verdict",
+                            "evidence")
+    assert table.rows == (("f1", "E", "yes", "M", "M", "localized", "ev"),
+                          ("f2", "E (bench)", "no", "-", "Qv", "missed", "ev2"),
+                          ("-", "F", "-", "-", "-", "not run", "why"))
+    assert sec.comparisons == []
+
+
+def test_the_faults_stage_tasks_and_assemble():
+    from comparisons.stages.pool import TaskResult
+    from comparisons.stages.stage import Plan
+    facts = {"reference": SimpleNamespace(spec="reference", has_terms=True),
+             "p": SimpleNamespace(spec="p", label="P", has_terms=True, contacts=("disc",),
+                                  costs=SimpleNamespace(faults=4.0)),
+             "r": SimpleNamespace(spec="r", label="R", has_terms=False, contacts=("disc",))}
+    opts = lambda models: SimpleNamespace(models=models, tolerances="TOLS",   # noqa: E731
+                                          options_for=lambda: {"p": {"k": 1}})
+    stage = fl.FaultsStage()
+    assert (stage.name, stage.section) == ("faults", "faults")
+    (t,) = stage.tasks(Plan(opts(()), (), facts))
+    assert (t.key, t.func, t.args, t.cost, t.label, t.engine) == (
+        ("p", None), fl.fault_entries, ("TOLS", "p", None, (("k", 1),)), 4.0,
+        "fault injection on P", "p")
+    models = (SimpleNamespace(spec="d.toml", name="D", contact="disc"),
+              SimpleNamespace(spec="t.toml", name="T", contact="torus"))
+    (t,) = stage.tasks(Plan(opts(models), (), facts))
+    assert (t.key, t.args, t.label) == (("p", "d.toml"), ("TOLS", "p", "d.toml", (("k", 1),)),
+                                        "D: fault injection on P")
+    plan = Plan(opts(()), (), facts)
+    e1 = {"fault": "f1", "engine": "P", "detected": True, "localized_to": "M", "expected": "M",
+          "verdict": "localized", "evidence": "ev"}
+    out = stage.assemble(plan, {("p", None): TaskResult(None, [e1], 1.0),
+                                ("p", "d.toml"): TaskResult(None, None, 1.0, "boom")})
+    assert out.faults == [e1]
+    failed, table = out.sections
+    assert failed.title == "fault injection on P" and failed.comparisons[0]["passed"] is False
+    assert table.title == "Fault injection: does the harness catch a broken model?"
+    assert _tables(table)[0].rows[0][0] == "f1"
+    out = stage.assemble(plan, {("p", None): TaskResult(None, None, 1.0, "boom")})
+    assert out.faults == [] and [s.title for s in out.sections] == ["fault injection on P"]
+
+
+def test_localization_lines_for_the_pairs_whose_terms_failed(monkeypatch):
+    from comparisons.judgments import diagnose
+    from engines import UnsupportedModel
+    localized = []
+
+    def localize(model, states, engines, tolerances):
+        localized.append((model.name, len(states), engines, tolerances))
+        if engines == ["raises"]:
+            raise ValueError("no fit")
+        return SimpleNamespace(describe=lambda: f"{model.name}: the fork")
+
+    monkeypatch.setattr(diagnose, "localize", localize)
+
+    def setup(built=None, exc=None):
+        def build(model):
+            if exc is not None:
+                raise exc
+            return built
+        return SimpleNamespace(build=build)
+
+    setups = {"A": setup("engine A"), "B": setup("raises"),
+              "C": setup(exc=UnsupportedModel("no")), "D": setup(exc=OSError("gone"))}
+    row = lambda q, engines, passed, model="thesis": {   # noqa: E731
+        "quantity": q, "engines": engines, "passed": passed, "model": model}
+    comparisons = [row("mass_matrix", ["reference", "A"], False),
+                   row("gravity", ["reference", "A"], False),        # the same pair: once
+                   row("mass_matrix", ["reference", "A"], False, "mine"),
+                   row("torques", ["reference", "B"], False),
+                   row("multipliers", ["reference", "C"], False),
+                   row("mass_matrix", ["reference", "D"], False),
+                   row("mass_matrix", ["reference", "E"], False),     # no setup: skipped
+                   row("mass_matrix", ["reference", "F"], True),      # passed: none
+                   row("mass_matrix", ["reference", "G"], None),      # reported: none
+                   row("trajectory", ["reference", "H"], False),      # not a term
+                   row("mass_matrix", ["A"], False),                  # one engine
+                   {"quantity": "gravity", "engines": ["reference", "A"], "passed": False}]
+    lines = fl.localization_lines("TOLS", comparisons, setups, {"mine": "benchmark"})
+    assert lines == [("mine: reference vs A", "benchmark: the fork"),
+                     ("thesis: reference vs A", "thesis: the fork"),
+                     ("thesis: reference vs B", "not localized: ValueError: no fit")]
+    assert [(m, n, e, t) for m, n, e, t in localized] == [
+        ("benchmark", 16, ["engine A"], "TOLS"), ("thesis", 16, ["engine A"], "TOLS"),
+        ("thesis", 16, ["raises"], "TOLS")]
+    assert fl.localization_lines("TOLS", comparisons[7:10], setups) == []
+    # a model name that does not load: nothing to localize against
+    assert fl.localization_lines("TOLS", [row("gravity", ["reference", "A"], False,
+                                              "no-such-model")], setups) == []
