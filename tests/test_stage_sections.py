@@ -335,6 +335,8 @@ def test_the_engines_table_cells_and_verdicts():
         ("A", "disc", "2.0e-06 at 10 m/s", "none (-)", "6.5000000000 (0e+00)", "0.12", "FAIL", ""),
         ("C", "bench", "-", "-", "-", "-", "FAIL", "it broke"),
         ("D", "bench", "0.0e+00 at 0 m/s", "none (-)", "none (-)", "2.00", "pass", ""))
+    # the note under the table says what a 'none' cell means
+    assert table.note.startswith("none: no such speed in the range")
 
 
 def test_the_engines_rows_not_run_failed_and_judged():
@@ -1141,3 +1143,191 @@ def test_localization_lines_for_the_pairs_whose_terms_failed(monkeypatch):
     # a model name that does not load: nothing to localize against
     assert fl.localization_lines("TOLS", [row("gravity", ["reference", "A"], False,
                                               "no-such-model")], setups) == []
+
+
+# -- the energy drift (comparisons/stages/energy.py) ----------------------------------------
+
+from comparisons.stages import energy as en  # noqa: E402
+
+EN_TOL = {"energy_drift": SimpleNamespace(tolerance=0.01, reason="the reason")}
+
+
+def _drift(engine, drift, status="success", settings="h = 0.001", t_end=1.0):
+    return {"engine": engine, "status": status, "settings": settings, "E0": 12.34567,
+            "drift_percent": drift, "drift_J": drift * 0.1234567, "drift_percent_of_T0": 2 * drift,
+            "t_end": t_end}
+
+
+EN_ROWS = [_drift("reference thesis-disc", 1e-9, settings="DOP853 rtol 1e-10, projection"),
+           _drift("A", 0.01),                                   # at the tolerance: pass
+           _drift("B", 0.0100001),                              # above it: FAIL
+           _drift("C", 1e-6, status="failed", t_end=0.456),     # a run that failed: FAIL
+           {"engine": "D", "not_run": "not run on this model: no disc"},
+           {"engine": "E", "failed": "RuntimeError: boom"}]
+
+
+def test_the_energy_table_and_verdicts():
+    sec = en.energy_section(EN_TOL, (), "thesis-disc", EN_ROWS)
+    assert sec.title == "Energy drift, torque-free and drag-free (IFToMM: 100 (Emax - Emin) / E0)"
+    (table,) = _tables(sec)
+    assert table.header == ("engine", "settings", "E0 [J]", "drift [% of E0]", "verdict", "status")
+    assert table.rows == (
+        ("reference thesis-disc", "DOP853 rtol 1e-10, projection", "12.346", "1.00e-09", "pass",
+         "success at 1.00 s"),
+        ("A", "h = 0.001", "12.346", "1.00e-02", "pass", "success at 1.00 s"),
+        ("B", "h = 0.001", "12.346", "1.00e-02", "FAIL", "success at 1.00 s"),
+        ("C", "h = 0.001", "12.346", "1.00e-06", "FAIL", "failed at 0.46 s"),
+        ("D", "-", "-", "-", "not run", "not run on this model: no disc"),
+        ("E", "-", "-", "-", "FAIL", "RuntimeError: boom"))
+    text = _texts(sec)
+    assert text[0].startswith("Free roll from the stability study's leaned and steered state at "
+                              "psi_dot = 10 rad/s for 1 s")
+    assert text[1] == "Tolerance 0.01 % (`tolerances.toml` [energy_drift]: the reason)"
+
+
+def test_the_energy_rows():
+    sec = en.energy_section(EN_TOL, (), "thesis-disc", EN_ROWS)
+    rows = [r.as_dict() for r in sec.comparisons]
+    assert [r["engines"] for r in rows] == [["reference thesis-disc"], ["A"], ["B"], ["C"], ["E"]]
+    assert [r["passed"] for r in rows] == [True, True, False, False, False]
+    for r in rows:
+        assert list(r)[:len(COMMON)] == list(COMMON)
+        assert (r["quantity"], r["scenario"], r["model"], r["tolerance"]) == (
+            "energy drift percent", "free-roll", "thesis-disc (cv = 0)", 0.01)
+    assert [r["max_error"] for r in rows] == [1e-9, 0.01, 0.0100001, 1e-6, None]
+    assert rows[1]["localized_to"] == "h = 0.001"
+    assert rows[1]["note"].startswith("A (h = 0.001; success at 1.00 s): E0 = 12.3457 J")
+    assert rows[4] == {"quantity": "energy drift percent", "scenario": "free-roll",
+                       "model": "thesis-disc (cv = 0)", "engines": ["E"], "max_error": None,
+                       "tolerance": 0.01, "passed": False, "localized_to": "RuntimeError: boom",
+                       "note": ""}
+
+
+def test_the_free_roll_start_on_a_users_bicycle(monkeypatch):
+    """v = the middle of the weave (4) and capsize (6 m/s) speeds, psi_dot = v / R_rear (0.3 m
+    on the benchmark); 1.2 x the weave speed without a capsize speed; psi_dot = 10 rad/s
+    without either, or for a contact the stability study does not linearize."""
+    from comparisons.judgments.energy import free_roll_model
+    from comparisons.stages import stability
+    from reference_model import load_model
+    assert en.free_roll_on("thesis-disc", None) == (
+        None, "the stability study's leaned and steered state at psi_dot = 10 rad/s")
+    free = free_roll_model(load_model("benchmark"))
+    asked = []
+    for crit, psi_dot, words in (
+            ({"weave": 4.0, "capsize": 6.0}, 5.0 / 0.3, "psi_dot = 16.67 rad/s (v = 5.000 m/s, "
+                                                        "the middle of its self-stable range)"),
+            ({"weave": 4.0}, 4.8 / 0.3, "psi_dot = 16 rad/s (v = 4.800 m/s)"),
+            ({}, 10.0, "psi_dot = 10 rad/s (v = 3.000 m/s)")):
+        monkeypatch.setattr(stability, "critical", lambda spec, c=crit: asked.append(spec) or c)
+        sc, start = en.free_roll_on("bench.toml", free)
+        assert start == "lean and steer pi/32 at " + words
+        assert math.isclose(sc.dq_ind0[1], psi_dot, rel_tol=1e-12)
+        assert sc.q0[3] == sc.q0[6] == np.pi / 32 and sc.model == "benchmark"
+    assert asked == ["bench.toml"] * 3
+    torus = SimpleNamespace(contact="thesis", name="mine", params=SimpleNamespace(R_rear=0.3))
+    sc, start = en.free_roll_on("mine.toml", torus)
+    assert asked == ["bench.toml"] * 3 and sc.dq_ind0[1] == 10.0 and "(v = 3.000 m/s)" in start
+
+
+def test_an_engines_energy_runs_are_its_fixed_step_variants_or_its_first_setup():
+    # engines/facts.py: Exudyn's fixed step (h = 1e-3 s), variants tree and redundant
+    assert en._runs_of("exudyn", {}) == [("exudyn tree", {"build": "tree", "step": 0.001}),
+                                         ("exudyn redundant", {"build": "redundant",
+                                                               "step": 0.001})]
+    assert en._runs_of("exudyn", {"step": 0.002}) == [("exudyn", {"step": 0.002})]
+    assert en._runs_of("pinocchio", {}) == [("pinocchio", {})]
+
+
+def test_energy_rows_of_an_engine_not_run_failed_and_its_baumgarte_fallback(monkeypatch):
+    from engines import EngineError, UnsupportedModel
+    calls = []
+    behaviour = {"ok": {"projection": "row"},
+                 "baum": {"projection": EngineError("no\n  projection"), "baumgarte": "row"},
+                 "both": {"projection": EngineError("no"), "baumgarte": RuntimeError("x  y")},
+                 "bad": {"projection": RuntimeError("z" * 400)}}
+
+    def drifts(free, sc, engines=()):
+        if sc is None:       # the reference's: its default free roll
+            calls.append((free.params.cv, None))
+            return ["reference rows"]
+        calls.append((free.params.cv, sc.constraints, sc.name, [e for e, _ in engines]))
+        what = behaviour[engines[0][1]][sc.constraints]
+        if isinstance(what, Exception):
+            raise what
+        return [{"engine": "reference"}, {"engine": engines[0][0], "settings": "h = 1"}]
+
+    def load(spec, model, **opts):
+        if opts["mode"] == "unsupported":
+            raise UnsupportedModel("no disc")
+        return opts["mode"]
+
+    runs = [(f"x {m}", {"mode": m}) for m in ("unsupported", "ok", "baum", "both", "bad")]
+    monkeypatch.setattr(en, "energy_drifts", drifts)
+    monkeypatch.setattr(en, "load_engine", load)
+    monkeypatch.setattr(en, "_runs_of", lambda spec, options: runs)
+    assert en.energy_rows(None, {}) == ["reference rows"]
+    assert calls == [(0.0, None)]
+    rows = en.energy_rows("x", {})
+    assert rows == [
+        {"engine": "x unsupported", "not_run": "not run on this model: no disc"},
+        {"engine": "x ok", "settings": "h = 1"},
+        {"engine": "x baum", "settings": "h = 1; Baumgarte a1 = a2 = 10 (it refused "
+                                         "projection: no projection)"},
+        {"engine": "x both", "failed": "RuntimeError: x y"},
+        {"engine": "x bad", "failed": "RuntimeError: " + "z" * 300}]
+    assert [c[1] for c in calls[1:]] == ["projection", "projection", "baumgarte", "projection",
+                                         "baumgarte", "projection"]
+    assert all(c[0] == 0.0 and c[2] == "free-roll-psid10" for c in calls[1:])
+    behaviour["long"] = {"projection": EngineError("w" * 200), "baumgarte": "row"}
+    monkeypatch.setattr(en, "_runs_of", lambda spec, options: [("x long", {"mode": "long"})])
+    (row,) = en.energy_rows("x", {})
+    assert row["settings"].endswith("(it refused projection: " + "w" * 120 + ")")
+
+
+def test_the_energy_stage_tasks_and_assemble():
+    from comparisons.stages.pool import TaskResult
+    from comparisons.stages.stage import Plan
+    facts = {"reference": SimpleNamespace(spec="reference"),
+             "p": SimpleNamespace(spec="p", label="P", capabilities={"simulate"},
+                                  run_difference=None, fixed_step=None,
+                                  costs=SimpleNamespace(run_per_second=0.6)),
+             "x": SimpleNamespace(spec="x", label="X", capabilities={"simulate"},
+                                  run_difference=None, fixed_step="a fixed step",
+                                  costs=SimpleNamespace(run_per_second=0.5)),
+             "soft": SimpleNamespace(spec="soft", label="S", capabilities={"simulate"},
+                                     run_difference="soft contact"),
+             "terms": SimpleNamespace(spec="terms", label="T", capabilities={"mass_matrix"},
+                                      run_difference=None)}
+    opts = lambda models: SimpleNamespace(models=models, tolerances=EN_TOL,   # noqa: E731
+                                          options_for=lambda: {"p": {"k": 1}})
+    stage = en.EnergyStage()
+    assert (stage.name, stage.section) == ("energy", "energy")
+    tasks = stage.tasks(Plan(opts(()), (), facts))
+    assert [(t.key, t.func, t.args, t.cost, t.label, t.engine) for t in tasks] == [
+        ((None, "thesis-disc"), en.energy_rows, (None, {}, "thesis-disc"), 0.5,
+         "energy drift of the reference", None),
+        (("p", "thesis-disc"), en.energy_rows, ("p", {"k": 1}, "thesis-disc"), 0.6,
+         "energy drift on P", "p"),
+        (("x", "thesis-disc"), en.energy_rows, ("x", {}, "thesis-disc"), 1.0,
+         "energy drift on X", "x")]
+    models = (SimpleNamespace(spec="m.toml", name="M"),)
+    assert [(t.key, t.label) for t in stage.tasks(Plan(opts(models), (), facts))][:2] == [
+        ((None, "m.toml"), "M: energy drift of the reference"),
+        (("p", "m.toml"), "M: energy drift on P")]
+    assert stage.tasks(Plan(opts(()), (), {"soft": facts["soft"]})) == []
+    plan = Plan(opts(()), (), facts)
+    out = stage.assemble(plan, {(None, "thesis-disc"): TaskResult(None, EN_ROWS[:1], 1.0),
+                                ("p", "thesis-disc"): TaskResult(None, EN_ROWS[1:2], 1.0),
+                                ("x", "thesis-disc"): TaskResult(None, None, 1.0, "boom")})
+    sec, failed = out.sections
+    assert [r["engines"] for r in sec.comparisons] == [["reference thesis-disc"], ["A"]]
+    assert failed.title == "Energy drift on X"
+    # the reference's task failed or was not run: no section of the engines' rows alone
+    out = stage.assemble(plan, {(None, "thesis-disc"): TaskResult(None, None, 1.0, "boom"),
+                                ("p", "thesis-disc"): TaskResult(None, EN_ROWS[1:2], 1.0)})
+    assert [s.title for s in out.sections] == ["Energy drift"]
+    out = stage.assemble(plan, {(None, "thesis-disc"): TaskResult(None, EN_ROWS[4:5], 1.0)})
+    assert out.sections == []
+    out = stage.assemble(plan, {(None, "thesis-disc"): TaskResult(None, [], 1.0)})
+    assert out.sections == []
