@@ -1331,3 +1331,94 @@ def test_the_energy_stage_tasks_and_assemble():
     assert out.sections == []
     out = stage.assemble(plan, {(None, "thesis-disc"): TaskResult(None, [], 1.0)})
     assert out.sections == []
+
+
+# -- the stability claims on thesis-disc (comparisons/stages/soft_contact_claims.py) ---------
+
+from comparisons.stages import soft_contact_claims as scc  # noqa: E402
+
+
+def _claim(cid, engine, verdict="holds", evidence="ev"):
+    return {"claim_id": cid, "claim": f"claim {cid}", "engine": engine, "verdict": verdict,
+            "evidence": evidence}
+
+
+def test_the_disc_evidence_prefix_and_the_stability_scenarios():
+    assert scc.MODEL == "thesis-disc"
+    assert scc.on_disc("MuJoCo") == ("on thesis-disc (MuJoCo has no thesis fork-axis contact; the "
+                                     "claim judged on its run of the same scenario with the disc "
+                                     "contact): ")
+    assert scc._stability(("check", "stability-psid0", "zigzag", "stability-psid5")) == (
+        "stability-psid0", "stability-psid5")
+
+
+def test_the_claims_judged_on_disc_runs(monkeypatch):
+    """The runs of the stability scenarios only, on thesis-disc, by the engine built there;
+    only the stability claims kept."""
+    import engines.runs
+    from comparisons.judgments import claims as jc
+    runs, judged, built = [], [], []
+
+    def run_scenario(name, engine, model, sc, kinds):
+        runs.append((name, engine, model.name, sc.name, kinds))
+        return f"run {sc.name}"
+
+    def judge_claims(r, names, model, stab):
+        judged.append((r, names, model.name, stab))
+        return [_claim("stability-a", names[0]), _claim("zigzag-b", names[0]),
+                _claim("stability-c", names[0])]
+
+    monkeypatch.setattr(engines.runs, "run_scenario", run_scenario)
+    monkeypatch.setattr(jc, "judge_claims", judge_claims)
+    monkeypatch.setattr(scc, "load_engine",
+                        lambda spec, model: built.append((spec, model.name)) or f"{spec} built")
+    d = scc.claims_on_disc("pinocchio", ("check", "stability-psid0", "stability-psid5"))
+    assert (d.engine, d.label) == ("pinocchio", "Pinocchio")
+    assert [c["claim_id"] for c in d.claims] == ["stability-a", "stability-c"]
+    assert built == [("pinocchio", "thesis-disc")]
+    assert runs == [("pinocchio", "pinocchio built", "thesis-disc", n, ("forward",))
+                    for n in ("stability-psid0", "stability-psid5")]
+    (r, names, model, stab) = judged[0]
+    assert r == {("pinocchio", n): f"run {n}" for n in ("stability-psid0", "stability-psid5")}
+    assert (names, model, stab) == (["pinocchio"], "thesis-disc",
+                                    ("stability-psid0", "stability-psid5"))
+    ref = scc.reference_claims_on_disc(("stability-psid0", "zigzag"))
+    assert (ref.engine, ref.label) == ("reference", "reference")
+    assert built[-1] == ("reference", "thesis-disc")
+    assert runs[-1][:4] == ("reference", "reference built", "thesis-disc", "stability-psid0")
+    assert judged[-1][1:] == (["reference"], "thesis-disc", ("stability-psid0",))
+
+
+def test_the_claims_table_a_column_per_engine_and_the_references():
+    ref = scc.DiscClaims("reference", "reference", (_claim("s1", "reference", "holds", "r1"),
+                                                    _claim("s2", "reference", "fails", "r2")))
+    a = scc.DiscClaims("mujoco", "MuJoCo", (_claim("s2", "mujoco", "holds", "m2"),
+                                           _claim("s3", "mujoco", "fails", "m3")))
+    b = scc.DiscClaims("drake", "Drake", ())
+    sec = scc.claims_section(ref, [a, b])
+    assert sec.title == "The thesis's stability claims on thesis-disc: the soft-contact engines"
+    (table,) = _tables(sec)
+    assert table.header == ("claim", "reference thesis-disc", "mujoco thesis-disc",
+                            "drake thesis-disc")
+    assert table.rows == (("claim s1", "holds: r1", "-", "-"),
+                          ("claim s2", "fails: r2", "holds: m2", "-"),
+                          ("claim s3", "-", "fails: m3", "-"))
+    assert sec.comparisons == []
+    assert _texts(sec)[0].startswith("MuJoCo and Drake cannot run")
+    c = scc.DiscClaims("dart", "DART", ())
+    assert _texts(scc.claims_section(None, [a, b, c]))[0].startswith("MuJoCo, Drake and DART "
+                                                                    "cannot")
+    alone = scc.claims_section(None, [a])
+    assert _texts(alone)[0].startswith("MuJoCo cannot run")
+    assert _tables(alone)[0].header == ("claim", "mujoco thesis-disc")
+    assert _texts(scc.claims_section(ref, []))[0].startswith("- cannot run")
+
+
+def test_merge_claims_replaces_only_that_engines_judged_entries():
+    claims = [_claim("s1", "mujoco", "not assessed", "-"), _claim("s2", "mujoco", "not assessed"),
+              _claim("s1", "drake", "not assessed", "-"), _claim("s1", "reference", "holds")]
+    disc = scc.DiscClaims("mujoco", "MuJoCo", (_claim("s1", "mujoco", "fails", "lean grows"),))
+    merged = scc.merge_claims(claims, disc)
+    assert merged == [dict(claims[0], verdict="fails", evidence=scc.on_disc("MuJoCo") +
+                           "lean grows"), claims[1], claims[2], claims[3]]
+    assert claims[0]["verdict"] == "not assessed"          # the input untouched
