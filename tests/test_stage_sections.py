@@ -1422,3 +1422,158 @@ def test_merge_claims_replaces_only_that_engines_judged_entries():
     assert merged == [dict(claims[0], verdict="fails", evidence=scc.on_disc("MuJoCo") +
                            "lean grows"), claims[1], claims[2], claims[3]]
     assert claims[0]["verdict"] == "not assessed"          # the input untouched
+
+
+# -- engine setups and runs (comparisons/stages/runs.py) ------------------------------------
+
+from comparisons.stages import runs as rn  # noqa: E402
+
+
+def _facts(name="e", run_setups=None, has_inverse_runs=False, capabilities=("simulate",),
+           costs=None):
+    from engines.facts import Costs, RunSetup
+    return SimpleNamespace(name=name, run_setups=run_setups or (RunSetup(),),
+                           has_inverse_runs=has_inverse_runs, capabilities=set(capabilities),
+                           costs=costs or Costs())
+
+
+def test_an_engine_setups_defaults_and_build(monkeypatch):
+    import engines
+    s = rn.EngineSetup("lab", "eng")
+    assert (s.options, s.kinds, s.settings) == ((), ("inverse", "forward"), "")
+    monkeypatch.setattr(engines, "load_engine", lambda spec, model, **o: (spec, model, o))
+    assert rn.EngineSetup("l", "eng", (("a", 1), ("b", 2))).build("M") == ("eng", "M",
+                                                                           {"a": 1, "b": 2})
+    assert rn.label_of("pinocchio") == "pinocchio"
+    assert rn.label_of("pkg.mod:Engine") == "Engine" and rn.label_of("a:b.py:C") == "C"
+
+
+def test_the_kinds_a_setup_runs():
+    assert rn._kinds(_facts(), ("forward",)) == ("forward",)
+    assert rn._kinds(_facts(), ["inverse"]) == ("inverse",)
+    assert rn._kinds(_facts("reference", capabilities=()), None) == ("inverse", "forward")
+    assert rn._kinds(_facts(has_inverse_runs=True), None) == ("inverse", "forward")
+    assert rn._kinds(_facts(has_inverse_runs=True, capabilities=()), None) == ("inverse",)
+    assert rn._kinds(_facts(), None) == ("forward",)
+    assert rn._kinds(_facts(capabilities=("mass_matrix",)), None) == ()
+
+
+def test_the_declared_setups_or_one_from_the_command_lines_options(monkeypatch):
+    import engines.facts
+    from engines.facts import RunSetup
+    table = {"one": _facts("one", (RunSetup(kinds=("forward",), settings="its way"),)),
+             "two": _facts("two", (RunSetup("a", (("x", 1),), settings="A"),
+                                   RunSetup("b", (("x", 2),), ("inverse",)))),
+             "pkg:Plain": _facts("plain", has_inverse_runs=True)}
+    monkeypatch.setattr(engines.facts, "engine_facts", lambda spec: table[spec])
+    assert rn.engine_setups("one") == [rn.EngineSetup("one", "one", (), ("forward",), "its way")]
+    assert rn.engine_setups("two") == [
+        rn.EngineSetup("two-a", "two", (("x", 1),), ("forward",), "A"),
+        rn.EngineSetup("two-b", "two", (("x", 2),), ("inverse",), "two with its own defaults")]
+    assert rn.engine_setups("pkg:Plain") == [
+        rn.EngineSetup("Plain", "pkg:Plain", (), ("inverse", "forward"),
+                       "pkg:Plain with its own defaults")]
+    # command-line options: one setup, options sorted, the single declared setup's kinds
+    assert rn.engine_setups("one", {"z": 1, "a": "b"}) == [
+        rn.EngineSetup("one", "one", (("a", "b"), ("z", 1)), ("forward",),
+                       "one with a = b, z = 1")]
+    # several declared setups: the kinds from the capabilities
+    assert rn.engine_setups("two", {"x": 3})[0].kinds == ("forward",)
+    assert rn.engine_setups("one", {}) == rn.engine_setups("one")
+    assert rn.setups_for(["two", "one"], {"one": {"k": 1}}) == [
+        *rn.engine_setups("two"), *rn.engine_setups("one", {"k": 1})]
+    assert rn.setups_for(["one"]) == rn.engine_setups("one")
+    assert rn.setup_of("two") == rn.engine_setups("two")[0]
+    assert rn.setup_of("one", {"k": 1}).options == (("k", 1),)
+
+
+def test_a_runs_cost_from_the_declared_costs(monkeypatch):
+    import engines.facts
+    from engines.facts import Costs
+    costs = Costs(run_per_second=2.0, short_run=0.3, scenario_runs=(("replay", 8.0),))
+    monkeypatch.setattr(engines.facts, "engine_facts", lambda spec: _facts(costs=costs))
+    s = rn.EngineSetup("l", "e")
+    assert rn.cost(s, "replay") == 8.0 and rn.cost(s, "replay-on-mine") == 8.0
+    assert rn.cost(s, "check") == rn.cost(s, "zigzag-on-mine") == 0.3
+    assert rn.cost(s, "check-forward") == 2.0 * 6.3        # 6.3 s of simulated motion
+    assert rn.cost(s, "stability-psid0") == 2.0 * 1.2
+
+
+class _RunEnv(SimpleNamespace):
+    pass
+
+
+@pytest.fixture
+def run_env(monkeypatch):
+    """`run_one` with `run_scenario`, the engine loader and the registry replaced."""
+    import engines
+    import engines.registry
+    from engines import CapabilityError, UnsupportedModel
+    env = _RunEnv(calls=[], built=[], refuse=None, ctor=None)
+
+    class Cls:
+        contacts = ("disc", "thesis")
+
+        def __init__(self, model, **options):
+            if env.ctor is not None:
+                raise env.ctor
+
+    def load(spec, model, **options):
+        env.built.append((spec, model.name, options))
+        if env.refuse is not None:
+            raise env.refuse
+        return f"{spec} engine"
+
+    monkeypatch.setattr(rn, "run_scenario", lambda label, eng, model, sc, kinds: env.calls.append(
+        (label, eng, model.name, sc.name, sc.model, kinds)) or "a run")
+    monkeypatch.setattr(engines, "load_engine", load)
+    monkeypatch.setattr(engines.registry, "resolve", lambda spec: (Cls,))
+    env.Cls, env.UnsupportedModel, env.CapabilityError = Cls, UnsupportedModel, CapabilityError
+    return env
+
+
+def test_run_one_builds_the_engine_on_the_runs_model(run_env):
+    s = rn.EngineSetup("lab", "eng", (("k", 1),), ("forward",))
+    assert rn.run_one(s, "check-forward") == "a run"
+    assert run_env.built == [("eng", "thesis", {"k": 1})]
+    assert run_env.calls == [("lab", "eng engine", "thesis", "check-forward", "thesis",
+                              ("forward",))]
+    rn.run_one(s, "check-forward", "thesis-disc")           # another model: the scenario's too
+    assert run_env.calls[-1][2:5] == ("thesis-disc", "check-forward", "thesis-disc")
+    rn.run_one(s, "check-forward", "thesis")
+    assert run_env.calls[-1][2:5] == ("thesis", "check-forward", "thesis")
+    from reference_model.scenarios import get_scenario
+    rn.run_one(s, get_scenario("check-forward"))             # a Scenario as well as a name
+    assert run_env.calls[-1][3] == "check-forward"
+
+
+def test_a_kind_the_setup_does_not_run_and_the_references_inverse_build_nothing(run_env):
+    rn.run_one(rn.EngineSetup("lab", "eng", (), ("forward",)), "check")      # inverse
+    assert run_env.built == [] and run_env.calls[-1][:2] == ("lab", None)
+    rn.run_one(rn.EngineSetup("reference", "reference"), "check")
+    assert run_env.built == [] and run_env.calls[-1][:2] == ("reference", None)
+    rn.run_one(rn.EngineSetup("reference", "reference"), "check-forward")
+    assert run_env.built == [("reference", "thesis", {})]
+    rn.run_one(rn.EngineSetup("other", "eng"), "check")
+    assert run_env.built[-1] == ("eng", "thesis", {})
+
+
+def test_a_model_the_engine_cannot_represent_is_a_not_run_run(run_env):
+    from engines.runs import Run
+    s = rn.EngineSetup("lab", "eng", (("k", 1),), ("forward",))
+    run_env.refuse = run_env.UnsupportedModel("its bodies break A + B >= C")
+    r = rn.run_one(s, "check-forward")
+    assert isinstance(r, Run) and r.t.size == 0
+    assert (r.engine, r.scenario, r.model, r.kind, r.status, r.message, r.seconds) == (
+        "lab", "check-forward", "thesis", "forward", "not run",
+        "not run on this model: its bodies break A + B >= C", 0.0)
+    run_env.Cls.contacts = ("disc",)            # the thesis's contact is not the engine's
+    run_env.ctor = run_env.CapabilityError("no fork-axis\n   contact")
+    assert rn.run_one(s, "check-forward").message == "CapabilityError: no fork-axis contact"
+    run_env.ctor = RuntimeError("anything else")
+    assert rn.run_one(s, "check-forward").message == (
+        "lab models the front contact(s) disc, not 'thesis' of model 'thesis'")
+    run_env.ctor = None                          # its constructor accepts it: the plain statement
+    assert rn.run_one(s, "check-forward").message == (
+        "lab models the front contact(s) disc, not 'thesis' of model 'thesis'")
+    assert run_env.calls == []
