@@ -1577,3 +1577,270 @@ def test_a_model_the_engine_cannot_represent_is_a_not_run_run(run_env):
     assert rn.run_one(s, "check-forward").message == (
         "lab models the front contact(s) disc, not 'thesis' of model 'thesis'")
     assert run_env.calls == []
+
+
+# -- the fixed-step integrators' study (comparisons/stages/fixed_step.py) -------------------
+
+from comparisons.stages import fixed_step as fx  # noqa: E402
+from engines.facts import FixedStep  # noqa: E402
+
+FIXED = FixedStep(option="step", step=2e-3, order=2.0,
+                  variants=(("tree", (("build", "tree"),)), ("red", (("build", "red"),))),
+                  thesis_variant="tree")
+FX_FACTS = SimpleNamespace(name="ex", label="Ex", spec="ex.spec", fixed_step=FIXED)
+
+
+def test_the_fixed_step_studys_constants_and_steps():
+    assert fx.CONVERGENCE_HORIZON == 0.5 and fx.DIVERGED == 1e-6
+    assert fx.FORWARD == ("stability-psid0", "stability-psid1", "stability-psid5",
+                          "stability-psid10", "replay")
+    assert fx.QUICK_FORWARD == ("stability-psid5",)
+    assert fx.TRAJECTORY_COSTS == {"replay": 2.4, "stability-psid10": 2.0}
+    # 1e-3 s: 5e-3 ... 6.25e-4 s (halvings over 8x); --quick: each twice that
+    assert fx.convergence_steps(False) == (5e-3, 2.5e-3, 1.25e-3, 6.25e-4)
+    assert fx.convergence_steps(True) == (1e-2, 5e-3, 2.5e-3, 1.25e-3)
+    np.testing.assert_allclose(fx.convergence_steps(False, FIXED), (1e-2, 5e-3, 2.5e-3, 1.25e-3),
+                               rtol=1e-15)          # a declared 2e-3 s step: all doubled
+
+
+def test_the_first_coordinate_past_the_threshold():
+    t = np.array([0.0, 0.5, 1.0])
+    err = {c: np.zeros(3) for c in COORDINATES_}
+    err["t"] = t
+    err["theta"] = np.array([0.0, 2e-6, 5e-6])
+    err["xc"] = np.array([0.0, 1e-6, 9e-6])
+    err["max"] = np.maximum(err["theta"], err["xc"])
+    assert fx.first_past(err) == "theta at 0.50 s"
+    assert fx.first_past(err, 3e-6) == "xc at 1.00 s"
+    assert fx.first_past(err, 1e-5) == ""
+    err["max"] = np.array([0.0, 1e-6, 1e-6])           # at the threshold: not past it
+    assert fx.first_past(err) == ""
+
+
+class _Sim:
+    """A built engine recording its runs: (its spec, model, options, scenario, t_end)."""
+
+    def __init__(self, log, spec, model, options):
+        self.log, self.key = log, (spec, model.name, options)
+
+    def simulate(self, sc, t_end=None):
+        self.log.append((*self.key, sc.name, t_end, sc.grid))
+        return SimpleNamespace(t_end=1.25, status="completed", key=len(self.log))
+
+
+@pytest.fixture
+def fx_env(monkeypatch):
+    import engines.facts
+    env = SimpleNamespace(sims=[], studies=[], verdicts={})
+    monkeypatch.setattr(engines.facts, "engine_facts", lambda spec: FX_FACTS)
+    monkeypatch.setattr(fx, "load_engine", lambda spec, model, **o: _Sim(env.sims, spec, model, o))
+
+    def study(ref_model, factory, sc, steps, horizon, runs):
+        env.studies.append((ref_model.name, sc.name, steps, horizon, [r.key for r in runs]))
+        verdict = env.verdicts.get(ref_model.name, "converges")
+        return SimpleNamespace(verdict=verdict, errors=(4e-4, 1e-4), order=2.004,
+                               difference=1.5e-3, steps=steps, verdict_reason="why " + verdict)
+
+    monkeypatch.setattr(fx, "convergence_study", study)
+    return env
+
+
+def test_the_convergence_study_on_the_thesis_bicycle(fx_env):
+    fx_env.verdicts = {"thesis": "model difference"}
+    sec = fx.convergence_section("ex.spec", False)
+    assert sec.title == "Ex convergence: integrator error or model difference?"
+    steps = fx.convergence_steps(False, FIXED)
+    # each (variant, engine model) runs once at the four steps, however many references judge it
+    runs = {(o["build"], m) for _, m, o, *_ in fx_env.sims}
+    assert runs == {("tree", "thesis-disc"), ("red", "thesis-disc"), ("tree", "thesis")}
+    assert len(fx_env.sims) == 3 * 4
+    assert [o["step"] for _, _, o, *_ in fx_env.sims[:4]] == list(steps)
+    assert all(s[3] == "stability-psid10" and s[4] == 0.5 for s in fx_env.sims)
+    assert [(r, s, st, h) for r, s, st, h, _ in fx_env.studies] == [
+        ("thesis-disc", "stability-psid10", steps, 0.5), ("thesis-disc", "stability-psid10", steps, 0.5),
+        ("thesis", "stability-psid10", steps, 0.5), ("thesis", "stability-psid10", steps, 0.5)]
+    assert fx_env.studies[2][4] == fx_env.studies[0][4]        # the disc tree's runs, reused
+    (table,) = _tables(sec)
+    assert table.header == fx.CONVERGENCE_HEADER == (
+        "engine", "reference", "errors by step [rad, m]", "fitted order", "verdict", "expected",
+        "as expected")
+    from reference_model.scenarios import SCENARIOS
+    (mismatch,) = SCENARIOS["stability-psid10"].expected_differences
+    assert table.rows == (
+        ("ex tree, disc contact", "thesis-disc", "4.00e-04, 1.00e-04", "2.00", "converges",
+         "converges", "yes"),
+        ("ex red, disc contact", "thesis-disc", "4.00e-04, 1.00e-04", "2.00", "converges",
+         "converges", "yes"),
+        ("ex tree, disc contact", "thesis", "4.00e-04, 1.00e-04", "2.00", "model difference",
+         f"model difference (declared model difference: {mismatch.reason})", "yes"),
+        ("ex tree, thesis contact", "thesis", "4.00e-04, 1.00e-04", "2.00", "model difference",
+         "converges", "NO"))
+    assert "0.5 s, at h = 0.01, 0.005, 0.0025, 0.00125 s" in table.note
+    rows = [r.as_dict() for r in sec.comparisons]
+    assert [r["passed"] for r in rows] == [True, True, True, False]
+    assert rows[0] == {"quantity": "convergence order", "scenario": "stability-psid10",
+                       "model": "thesis-disc", "engines": ["reference", "ex-tree-disc"],
+                       "max_error": 1.5e-3, "tolerance": None, "passed": True,
+                       "localized_to": "order 2.00: converges", "note": "", "order": 2.004,
+                       "steps": list(steps), "errors": [4e-4, 1e-4], "verdict": "converges",
+                       "expected": "converges", "reason": "why converges"}
+    assert rows[2]["localized_to"] == ("order 2.00: model difference (expected: declared model "
+                                       "difference)")
+    assert rows[3]["engines"] == ["reference", "ex-tree-thesis"]
+    (fig,) = sec.figures
+    assert (fig.name, fig.kind) == ("ex_convergence.png", "convergence")
+    assert fig.data["horizon"] == 0.5 and fig.data["title"] == ("Ex against the reference, "
+                                                                "stability-psid10")
+    assert [c["label"] for c in fig.data["curves"]] == [
+        "ex tree (disc) vs reference thesis-disc: order 2.00",
+        "ex red (disc) vs reference thesis-disc: order 2.00",
+        "ex tree (disc) vs reference thesis: order 2.00",
+        "ex tree (thesis) vs reference thesis: order 2.00"]
+    assert fig.data["curves"][0]["steps"] == list(steps)
+    assert fig.data["curves"][0]["errors"] == [4e-4, 1e-4]
+    assert "twice the full run's" not in _texts(sec)[0]
+
+
+def test_the_quick_convergence_study_leaves_out_the_thesis_contacts_own_run(fx_env):
+    fx_env.verdicts = {"thesis": "model difference"}
+    sec = fx.convergence_section("ex.spec", True)
+    assert [r[:2] for r in _tables(sec)[0].rows] == [("ex tree, disc contact", "thesis-disc"),
+                                                     ("ex red, disc contact", "thesis-disc"),
+                                                     ("ex tree, disc contact", "thesis")]
+    assert [o["step"] for _, _, o, *_ in fx_env.sims[:4]] == list(fx.convergence_steps(True, FIXED))
+    assert "twice the full run's" in _texts(sec)[0]
+
+
+def test_the_convergence_study_on_a_users_bicycle(fx_env):
+    sec = fx.convergence_section("ex.spec", False, "benchmark")
+    assert sec.title == "Ex convergence on benchmark: integrator error or model difference?"
+    assert {(o["build"], m, name) for _, m, o, name, *_ in fx_env.sims} == {
+        ("tree", "benchmark", "stability-psid10-on-benchmark")}
+    assert [r[0] for r in fx_env.studies] == ["benchmark"]
+    assert _tables(sec)[0].rows == (("ex tree, disc contact", "benchmark", "4.00e-04, 1.00e-04",
+                                     "2.00", "converges", "converges", "yes"),)
+    assert sec.figures[0].name == "ex_convergence_benchmark.png"
+    assert "(h = 0.01, 0.005, 0.0025, 0.00125 s)" in _texts(sec)[0]
+
+
+def test_a_trajectory_part_up_to_the_horizon(monkeypatch, fx_env):
+    from reference_model.scenarios import SCENARIOS
+    got = {}
+    ref = SimpleNamespace(settings={"initial_correction": "theta_dot corrected by 1e-12"})
+    hor = SimpleNamespace(t=1.234, limited_by="twin runs", reason="the twin separates")
+
+    def errors(r, traj, coords, horizon):
+        got.setdefault("errors", []).append((r, coords, horizon))
+        t = np.array([0.0, 0.6, 1.2])
+        e = {c: np.zeros(3) for c in COORDINATES_}
+        e.update(t=t, theta=np.array([0.0, 3e-6, 1e-7]), xc=np.array([0.0, 1e-7, 2e-7]))
+        if traj.key > 1:
+            e["theta"] = e["theta"] * 0.1       # the second variant stays below 1e-6
+        e["max"] = np.maximum(e["theta"], e["xc"])
+        return e
+
+    monkeypatch.setattr(fx, "reference_run", lambda model, sc: got.update(ref=(model.name, sc.name)) or ref)
+    monkeypatch.setattr(fx, "reference_horizon",
+                        lambda model, sc, reference: got.update(hor=(model.name, reference)) or hor)
+    monkeypatch.setattr(fx, "error_vs_time", errors)
+    part = fx.trajectory_part("ex.spec", "stability-psid0")
+    assert got["ref"] == ("thesis-disc", "stability-psid0") and got["hor"] == ("thesis-disc", ref)
+    start, step, n = SCENARIOS["stability-psid0"].grid
+    cut = int(np.ceil((1.234 - start) / step)) + 3             # to the horizon and two samples
+    assert cut < n
+    assert [(m, o, name, g) for _, m, o, name, _, g in fx_env.sims] == [
+        ("thesis-disc", {"build": "tree", "step": 2e-3}, "stability-psid0", (start, step, cut)),
+        ("thesis-disc", {"build": "red", "step": 2e-3}, "stability-psid0", (start, step, cut))]
+    assert got["errors"][0][0] is ref and got["errors"][0][1:] == (COORDINATES_, 1.234)
+    assert part.rows == [
+        ("stability-psid0", "1.23", "twin runs", "ex-tree", "3.00e-06", "theta at 0.60 s",
+         "1.250 s (completed, run to the horizon)"),
+        ("stability-psid0", "1.23", "twin runs", "ex-red", "3.00e-07", "none (all below 1e-06)",
+         "1.250 s (completed, run to the horizon)")]
+    rows = [r.as_dict() for r in part.comparisons]
+    assert rows[0] == {"quantity": "trajectory (disc builds)", "scenario": "stability-psid0",
+                       "model": "thesis-disc", "engines": ["reference", "ex-tree"],
+                       "max_error": 3e-6, "tolerance": None, "passed": None,
+                       "localized_to": "theta at 0.60 s",
+                       "note": "reported, not judged: the convergence study judges Ex's "
+                               "trajectories", "horizon": 1.234,
+                       "horizon_reason": "the twin separates"}
+    assert rows[1]["localized_to"] == "-"
+    assert (part.figure.name, part.figure.kind) == ("ex_error_stability-psid0.png", "error_vs_time")
+    d = part.figure.data
+    assert set(d) == {"curves", "horizon", "threshold", "engine_label", "title"}
+    assert (d["horizon"], d["threshold"], d["engine_label"]) == (1.234, 1e-6, "Ex")
+    assert d["title"] == "stability-psid0: Ex against the reference up to the horizon (1.23 s)"
+    assert list(d["curves"]) == ["ex-tree", "ex-red"]
+    assert set(d["curves"]["ex-tree"]) == {"t", "theta", "xc"}
+    np.testing.assert_array_equal(d["curves"]["ex-tree"]["theta"], [0.0, 3e-6, 1e-7])
+    np.testing.assert_array_equal(d["curves"]["ex-tree"]["xc"], [0.0, 1e-7, 2e-7])
+    np.testing.assert_array_equal(d["curves"]["ex-tree"]["t"], [0.0, 0.6, 1.2])
+    assert part.correction == "stability-psid0: theta_dot corrected by 1e-12"
+    # a horizon past the scenario's end: the whole grid, no 'run to the horizon'
+    hor.t = 1e3
+    long = fx.trajectory_part("ex.spec", "stability-psid0")
+    assert fx_env.sims[-1][5] == (start, step, n)
+    assert long.rows[0][6] == "1.250 s (completed)"
+
+
+def test_the_trajectory_section_merges_the_parts():
+    fig_a, fig_b = (fx.Figure(f"{n}.png", "error_vs_time", {}) for n in "ab")
+    parts = [fx.TrajectoryPart([("s1", "row")], [{"c": 1}], fig_a, "s1: none"),
+             fx.TrajectoryPart([("s2", "row"), ("s2", "row2")], [{"c": 2}], fig_b, "s2: 1e-9")]
+    sec = fx.merge_trajectories(parts, FX_FACTS)
+    assert sec.title == "Reference vs Ex, forward trajectories (disc contact)"
+    (table,) = _tables(sec)
+    assert table.header == ("scenario", "horizon [s]", "horizon set by", "variant",
+                            "max error, 8 coordinates, to the horizon [rad, m]",
+                            "first coordinate past 1e-06", "end (status)")
+    assert table.rows == (("s1", "row"), ("s2", "row"), ("s2", "row2"))
+    assert sec.comparisons == [{"c": 1}, {"c": 2}]
+    assert sec.figures == [fig_a, fig_b]
+    first, last = _texts(sec)
+    assert first.startswith("Every declared variant of Ex (tree, red) at step = 0.002 s against")
+    assert last.endswith("every variant: s1: none; s2: 1e-9.")
+
+
+def test_the_fixed_step_stage_tasks_and_assemble():
+    from comparisons.stages.pool import TaskResult
+    from comparisons.stages.stage import Plan
+    facts = {"reference": SimpleNamespace(spec="reference", fixed_step=None, label="ref"),
+             "ex.spec": FX_FACTS,
+             "p": SimpleNamespace(spec="p", label="P", fixed_step=None)}
+    opts = lambda models, quick: SimpleNamespace(models=models, quick=quick)   # noqa: E731
+    stage = fx.FixedStepStage()
+    assert (stage.name, stage.section) == ("fixed-step", "fixed-step")
+    tasks = stage.tasks(Plan(opts((), False), (), facts))
+    assert [(t.key, t.func, t.args, t.cost, t.label, t.engine) for t in tasks] == [
+        *((("trajectory", "ex.spec", n), fx.trajectory_part, ("ex.spec", n),
+           {"replay": 2.4, "stability-psid10": 2.0}.get(n, 0.5) * 2, f"Ex trajectories: {n}",
+           "ex.spec") for n in fx.FORWARD),
+        (("convergence", "ex.spec", None), fx.convergence_section, ("ex.spec", False), 5.0,
+         "Ex convergence order", "ex.spec")]
+    tasks = stage.tasks(Plan(opts((), True), (), facts))
+    assert [(t.key, t.args, t.cost) for t in tasks] == [
+        (("trajectory", "ex.spec", "stability-psid5"), ("ex.spec", "stability-psid5"), 1.0),
+        (("convergence", "ex.spec", None), ("ex.spec", True), 3.0)]
+    models = (SimpleNamespace(spec="m.toml", name="M"),)
+    (t,) = stage.tasks(Plan(opts(models, False), (), facts))
+    assert (t.key, t.func, t.args, t.cost, t.label, t.engine) == (
+        ("convergence", "ex.spec", "m.toml"), fx.convergence_section, ("ex.spec", False, "m.toml"),
+        3.0, "M: Ex convergence order", "ex.spec")
+    part = fx.TrajectoryPart([("s", "r")], [], fx.Figure("a.png", "k", {}), "s: -")
+    conv = fx.Section("conv")
+    plan = Plan(opts((), False), (), facts)
+    out = stage.assemble(plan, {
+        ("convergence", "ex.spec", None): TaskResult(None, conv, 1.0),
+        ("trajectory", "ex.spec", "s1"): TaskResult(None, part, 1.0),
+        ("trajectory", "ex.spec", "s2"): TaskResult(None, None, 1.0, "boom"),
+        ("trajectory", "ex.spec", "s3"): TaskResult(None, part, 1.0),
+        ("convergence", "ex.spec", "m"): TaskResult(None, None, 1.0, "bang")})
+    merged, failed, c1, c2 = out.sections
+    assert merged.title == "Reference vs Ex, forward trajectories (disc contact)"
+    assert _tables(merged)[0].rows == (("s", "r"), ("s", "r"))
+    assert failed.title == "Ex trajectories: s2"
+    assert c1 is conv and c2.title == "Ex convergence"
+    assert c2.comparisons[0]["localized_to"] == "bang"
+    out = stage.assemble(plan, {("trajectory", "ex.spec", "s2"): TaskResult(None, None, 1.0, "x")})
+    assert [s.title for s in out.sections] == ["Ex trajectories: s2"]
