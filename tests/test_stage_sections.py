@@ -1844,3 +1844,91 @@ def test_the_fixed_step_stage_tasks_and_assemble():
     assert c2.comparisons[0]["localized_to"] == "bang"
     out = stage.assemble(plan, {("trajectory", "ex.spec", "s2"): TaskResult(None, None, 1.0, "x")})
     assert [s.title for s in out.sections] == ["Ex trajectories: s2"]
+
+
+# -- cases: scenarios on models (comparisons/stages/cases.py) -------------------------------
+
+from comparisons.stages import cases as cs  # noqa: E402
+
+
+def test_a_model_spec_of_a_named_model_and_of_a_file(monkeypatch, tmp_path):
+    from reference_model import NAMED_MODELS, load_model
+    m = cs.model_spec("benchmark")
+    assert m == cs.ModelSpec("benchmark", "benchmark", str(NAMED_MODELS["benchmark"][0]), "disc",
+                             0.0, ())
+    assert type(m.cv) is float
+    assert cs.model_spec("thesis").cv == 0.8 and cs.model_spec("thesis").contact == "thesis"
+    folder = NAMED_MODELS["benchmark"][0].parent
+    monkeypatch.chdir(folder)
+    f = cs.model_spec("benchmark.toml")          # relative: made absolute for the workers
+    assert f.spec == str(folder / "benchmark.toml") and f.source == "benchmark.toml"
+    assert f.name == load_model("benchmark.toml").name
+    assert cs.ModelSpec("s", "n", "src", "disc", 0.0, ("w1",)).as_dict() == {
+        "name": "n", "source": "src", "contact": "disc", "warnings": ["w1"]}
+
+
+def test_a_file_name_safe_slug():
+    assert cs.slug("My bike (v2)") == "My-bike-v2"
+    assert cs.slug("a.b_c-D9") == "a.b_c-D9"
+    assert cs.slug("--x/y--") == "x-y"
+    assert cs.slug(" ") == cs.slug("") == "model"
+
+
+def test_which_scenarios_apply_to_another_bicycle_and_how_they_are_bound():
+    from reference_model.scenarios import get_scenario
+    assert cs.not_applicable(get_scenario("benchmark-v4")).startswith(
+        "written for the benchmark bicycle's critical speeds")
+    assert cs.not_applicable(get_scenario("check")) is None
+    m = cs.ModelSpec("/abs/my bike.toml", "my bike", "my bike.toml", "disc", 0.0)
+    psid10 = get_scenario("stability-psid10")
+    assert psid10.expected_differences                   # the premise: it declares one
+    bound = cs.on_model(psid10, m)
+    assert (bound.name, bound.model, bound.expected_differences) == (
+        "stability-psid10-on-my-bike", "/abs/my bike.toml", ())
+    assert bound.q0 == psid10.q0 and bound.grid == psid10.grid
+    kept = cs.on_model(psid10, m, keep_name=True)
+    assert (kept.name, kept.model, kept.expected_differences) == (
+        "stability-psid10", "/abs/my bike.toml", psid10.expected_differences)
+
+
+def test_the_cases_without_models_are_the_built_ins():
+    from reference_model.scenarios import get_scenario
+    cases, skipped = cs.build_cases(["check", "benchmark-v4"], (), ())
+    assert [(c.name, c.scenario, c.model, c.origin) for c in cases] == [
+        ("check", get_scenario("check"), "thesis", "built-in"),
+        ("benchmark-v4", get_scenario("benchmark-v4"), "benchmark", "built-in")]
+    assert skipped == []
+
+
+def test_the_cases_on_models():
+    from reference_model.scenarios import get_scenario
+    mine = cs.ModelSpec("/abs/mine.toml", "Mine", "mine.toml", "disc", 0.0)
+    bench = cs.model_spec("benchmark")
+    cases, skipped = cs.build_cases(["check", "benchmark-v4"], (mine, bench), ())
+    assert [(c.name, c.model, c.origin) for c in cases] == [
+        ("check-on-Mine", "/abs/mine.toml", "built-in"),
+        ("check-on-benchmark", "benchmark", "built-in"),
+        ("benchmark-v4", "benchmark", "built-in")]           # its own model: as built in
+    assert cases[2].scenario == get_scenario("benchmark-v4")
+    assert cases[0].scenario.model == "/abs/mine.toml"
+    assert skipped == [cs.NotRun("benchmark-v4", "Mine",
+                                 cs.not_applicable(get_scenario("benchmark-v4")))]
+
+
+def test_a_scenario_file_runs_on_its_own_model_and_on_every_other(tmp_path):
+    from reference_model.scenario_files import BUILTIN_DIR
+    text = (BUILTIN_DIR / "check.toml").read_text().replace('name = "check"', 'name = "mine"')
+    f = tmp_path / "mine.toml"
+    f.write_text(text)
+    bench = cs.model_spec("benchmark")
+    thesis = cs.model_spec("thesis")
+    cases, skipped = cs.build_cases([], (bench, thesis), (str(f),))
+    assert [(c.name, c.model, c.origin) for c in cases] == [
+        ("mine", "thesis", str(f)), ("mine-on-benchmark", "benchmark", str(f))]
+    assert skipped == []
+    with pytest.raises(ValueError, match=r"two scenarios named 'mine' \(.*mine.toml, .*mine.toml\)"):
+        cs.build_cases([], (), (str(f), str(f)))
+    clash = tmp_path / "check.toml"
+    clash.write_text((BUILTIN_DIR / "check.toml").read_text())
+    with pytest.raises(ValueError, match=r"two scenarios named 'check' \(built-in, "):
+        cs.build_cases(["check"], (), (str(clash),))
