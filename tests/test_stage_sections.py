@@ -1932,3 +1932,180 @@ def test_a_scenario_file_runs_on_its_own_model_and_on_every_other(tmp_path):
     clash.write_text((BUILTIN_DIR / "check.toml").read_text())
     with pytest.raises(ValueError, match=r"two scenarios named 'check' \(built-in, "):
         cs.build_cases(["check"], (), (str(clash),))
+
+
+# -- the scenario stages (comparisons/stages/scenarios.py) ----------------------------------
+
+from comparisons.stages import scenarios as sn  # noqa: E402
+from engines.runs import Run  # noqa: E402
+
+
+def _run(engine, scenario, kind="forward", status="completed", n=5, message="", T=None,
+         trajectory=None, model="thesis"):
+    t = np.linspace(0.0, 0.04, n)
+    return Run(engine, scenario, model, kind, status, message, 0.1, t=t, q=np.zeros((n, 8)),
+               dq=np.zeros((n, 8)), T=T, trajectory=trajectory)
+
+
+def test_the_scenario_stages_constants_and_horizon(monkeypatch):
+    from reference_model.scenarios import get_scenario
+    assert (sn.CHECK_RELATIVE, sn.M_STATES) == (1e-12, 100)
+    seen = []
+    monkeypatch.setattr(sn, "reference_horizon",
+                        lambda model, sc: seen.append((model.name, sc.name)) or "hor")
+    assert sn.horizon_of("check-forward") == "hor"
+    assert sn.horizon_of(get_scenario("benchmark-v4")) == "hor"
+    assert seen == [("thesis", "check-forward"), ("benchmark", "benchmark-v4")]
+
+
+def test_the_check_scenarios_analytic_torques():
+    """Mped = cv (R psi_dot)^2 R at psi_dot = 5 rad/s (the check's rolling), the others zero:
+    a deviation of 1e-13 N m passes the 1e-12-relative bound, one of 1e-10 N m fails it."""
+    from reference_model import load_model
+    model = load_model("thesis")
+    p = model.params
+    mped = p.cv * (5.0 * p.R_rear) ** 2 * p.R_rear
+    T = np.tile([0.0, mped, 0.0], (7, 1))
+    T[3, 1] += 1e-13
+    got = sn.analytic_check(_run("reference", "check", "inverse", n=7, T=T), model)
+    assert set(got) == {"check", "value", "tolerance", "passed", "evidence"}
+    assert got["check"] == "check: Mped = cv (R psi_dot)^2 R, Mdir = Mvue = 0"
+    assert math.isclose(got["value"], 1e-13, rel_tol=1e-2)   # the sum's round-off at ~1 N m
+    assert math.isclose(got["tolerance"], 1e-12 * mped, rel_tol=1e-12)
+    assert got["passed"] is True
+    assert got["evidence"] == (f"Mped = {mped:.12g} N m expected; max deviation "
+                               f"{got['value']:.2e} N m over 7 samples")
+    T[5, 0] = 1e-10                                            # Mdir not zero
+    bad = sn.analytic_check(_run("reference", "check", "inverse", n=7, T=T), model)
+    assert bad["passed"] is False and math.isclose(bad["value"], 1e-10, rel_tol=1e-12)
+
+
+def test_the_reference_rows_checks_and_corrections():
+    from reference_model import load_model
+    model = load_model("thesis")
+    p = model.params
+    mped = p.cv * (5.0 * p.R_rear) ** 2 * p.R_rear
+    q = np.zeros((5, 8))
+    C = model.constraint_residual(q, np.zeros((5, 8)))     # the reference's own measure of it
+    runs = {("reference", "check"): _run("reference", "check", "inverse",
+                                         T=np.tile([0.0, mped, 0.0], (5, 1))),
+            ("reference", "zigzag"): _run("reference", "zigzag", "inverse", T=None,
+                                          message="ran; beta corrected by 1e-9 rad"),
+            ("reference", "stability-psid0"): _run(
+                "reference", "stability-psid0",
+                trajectory=SimpleNamespace(settings={"initial_correction": "none needed"})),
+            ("reference", "replay"): _run("reference", "replay", status="failed", n=0,
+                                          trajectory=SimpleNamespace(settings={}))}
+    rows, checks, corrections = sn.reference_rows(["check", "zigzag", "stability-psid0",
+                                                   "replay"], runs)
+    assert rows == [
+        {"scenario": "check", "kind": "inverse", "status": "completed", "t_end": "0.040",
+         "max_abs_C": f"{np.abs(C).max():.1e}"},
+        {"scenario": "zigzag", "kind": "inverse", "status": "completed", "t_end": "0.040",
+         "max_abs_C": f"{np.abs(C).max():.1e}"},
+        {"scenario": "stability-psid0", "kind": "forward", "status": "completed",
+         "t_end": "0.040", "max_abs_C": f"{np.abs(C).max():.1e}"},
+        {"scenario": "replay", "kind": "forward", "status": "failed", "t_end": "0.000",
+         "max_abs_C": "0.0e+00"}]
+    assert [c["check"] for c in checks] == ["check: Mped = cv (R psi_dot)^2 R, Mdir = Mvue = 0"]
+    assert corrections == {"zigzag": "beta corrected by 1e-9 rad",
+                           "stability-psid0": "none needed"}
+    # a case's own scenario (not a built-in) on its model
+    from reference_model.scenarios import get_scenario
+    mine = cs.on_model(get_scenario("check"), cs.model_spec("benchmark"))
+    runs[("reference", mine.name)] = _run("reference", mine.name, "inverse", T=None)
+    rows, checks, _ = sn.reference_rows([mine.name], runs, {mine.name: mine})
+    bench = load_model("benchmark").constraint_residual(q, np.zeros((5, 8)))
+    assert rows[0]["max_abs_C"] == f"{np.abs(bench).max():.1e}" and checks == []
+
+
+def test_an_engine_that_cannot_be_built_is_skipped_or_its_failure_a_row():
+    from engines import UnsupportedModel
+    from reference_model import load_model
+    model = load_model("thesis")
+
+    def setup(exc=None):
+        def build(m):
+            if exc is not None:
+                raise exc
+            return ("built", m.name)
+        return SimpleNamespace(label="E", build=build)
+
+    failures = []
+    assert sn._build_if_it_models(setup(), model, failures) == ("built", "thesis")
+    assert sn._build_if_it_models(setup(UnsupportedModel("no")), model, failures) is None
+    assert failures == []
+    assert sn._build_if_it_models(setup(RuntimeError("bad\n  " + "x" * 400)), model,
+                                  failures) is None
+    assert [f.as_dict() for f in failures] == [{
+        "quantity": "engine build", "scenario": "-", "model": "thesis", "engines": ["E"],
+        "max_error": None, "tolerance": None, "passed": False,
+        "localized_to": "RuntimeError: " + ("bad " + "x" * 400)[:300],   # the message cut
+        "note": "E raised while being built on thesis"}]
+
+
+def test_the_declared_run_difference_of_a_setup(monkeypatch):
+    monkeypatch.setattr(sn, "engine_facts",
+                        lambda spec: SimpleNamespace(run_difference=f"{spec}'s soft contact"))
+    assert sn.run_difference(SimpleNamespace(engine="mujoco")) == "mujoco's soft contact"
+
+
+class _MEngine:
+    name, model = "m-engine", "its model"
+
+    def __init__(self, supports=True, count=None, raises=None):
+        self.calls, self._s, self._count, self._raises = [], supports, count, raises
+
+    def supports(self, cap):
+        return self._s and cap == "mass_matrix"
+
+    def mass_matrix(self, q):
+        self.calls.append(np.array(q))
+        if self._raises:
+            raise self._raises
+        M = np.einsum("n,ij->nij", q[:, 0], np.eye(8))        # M of state k: q[k, 0] I
+        return M if self._count is None else M[:self._count]
+
+
+def test_the_mass_matrices_of_every_scenario_in_one_call():
+    blocks = {"a": np.full((2, 8), 1.0), "b": np.full((3, 8), 2.0)}
+    eng = _MEngine()
+    batch = sn._MassInOneCall(eng, blocks)
+    assert len(eng.calls) == 1 and eng.calls[0].shape == (5, 8)
+    a, b = batch.at("a"), batch.at("b")
+    assert (a.name, a.model, a.scenario) == ("m-engine", "its model", "a")
+    assert a.supports("mass_matrix") and not a.supports("gravity")
+    np.testing.assert_array_equal(a.mass_matrix(None), np.tile(np.eye(8), (2, 1, 1)))
+    np.testing.assert_array_equal(b.mass_matrix(None), 2.0 * np.tile(np.eye(8), (3, 1, 1)))
+    assert batch.error is None
+    short = sn._MassInOneCall(_MEngine(count=4), blocks)
+    assert str(short.error) == "mass_matrix returned 4 matrices for 5 states"
+    with pytest.raises(ValueError, match="returned 4 matrices"):
+        short.at("a").mass_matrix(None)
+    boom = sn._MassInOneCall(_MEngine(raises=KeyError("k")), blocks)
+    with pytest.raises(KeyError):
+        boom.at("b").mass_matrix(None)
+    none = _MEngine(supports=False)
+    assert sn._MassInOneCall(none, blocks).values == {} and none.calls == []
+    empty = _MEngine()
+    assert sn._MassInOneCall(empty, {}).values == {} and empty.calls == []
+
+
+def test_the_states_at_which_m_is_compared():
+    ok = SimpleNamespace(name="ok", kind="inverse", compared=("mass_matrix",))
+    no_m = SimpleNamespace(name="no_m", kind="inverse", compared=("torques",))
+    fwd = SimpleNamespace(name="fwd", kind="forward", compared=("mass_matrix",))
+    few = SimpleNamespace(name="few", kind="inverse", compared=("mass_matrix",))
+    dead = SimpleNamespace(name="dead", kind="inverse", compared=("mass_matrix",))
+    cases = {c.name: c for c in (ok, no_m, fwd, few, dead)}
+    runs = {("reference", "ok"): _run("reference", "ok", n=250),
+            ("reference", "no_m"): _run("reference", "no_m"),
+            ("reference", "fwd"): _run("reference", "fwd"),
+            ("reference", "few"): _run("reference", "few", n=50),
+            ("reference", "dead"): _run("reference", "dead", n=0, status="failed")}
+    runs[("reference", "ok")].q[:, 0] = np.arange(250)
+    got = sn._mass_states(list(cases), cases, runs, {})     # fwd: no horizon, unjudgeable
+    assert list(got) == ["ok", "few"]
+    np.testing.assert_array_equal(got["ok"][:, 0], np.arange(0, 250, 2))   # every 250 // 100
+    assert len(got["few"]) == 50
+    assert list(sn._mass_states(["fwd"], cases, runs, {"fwd": "a horizon"})) == ["fwd"]
