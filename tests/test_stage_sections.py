@@ -2109,3 +2109,190 @@ def test_the_states_at_which_m_is_compared():
     np.testing.assert_array_equal(got["ok"][:, 0], np.arange(0, 250, 2))   # every 250 // 100
     assert len(got["few"]) == 50
     assert list(sn._mass_states(["fwd"], cases, runs, {"fwd": "a horizon"})) == ["fwd"]
+
+
+@pytest.fixture
+def scen_env(monkeypatch):
+    """`compare_scenarios` with every judgment replaced by a recorder returning one marked row
+    (the judgments are tested on their own): what the stage asks for, and how it lays out."""
+    from comparisons.judgments.rows import Comparison
+    env = SimpleNamespace(calls=[], mass_raises=set())
+
+    def row(quantity, scenario, engines, passed=True, **kw):
+        return Comparison.of({"quantity": quantity, "scenario": scenario, "model": "thesis",
+                              "engines": engines, "max_error": 1e-9, "tolerance": 1e-6,
+                              "passed": passed, **kw})
+
+    def mass(name, model, q, engines, tols):
+        (label, eng), = engines.items()
+        env.calls.append(("M", name, label, len(q)))
+        if label in env.mass_raises:
+            raise RuntimeError("M broke")
+        return [row("mass_matrix", name, ["reference", label])]
+
+    def inverse(ref, r, tols):
+        env.calls.append(("inverse", r.scenario, r.engine))
+        return [row("torques", r.scenario, ["reference", r.engine])]
+
+    def constraints(model, r, tols):
+        env.calls.append(("C", r.scenario, r.engine))
+        return row("constraint_residual", r.scenario, [r.engine], localized_to="rD_z")
+
+    def series(model, r):
+        return np.full((len(r.t), 5), 0.5)
+
+    def declared(ref, r, hor, difference, cmax, cwhere):
+        env.calls.append(("declared", r.scenario, r.engine, difference, cmax, cwhere, hor.t))
+        return [row("trajectory", r.scenario, ["reference", r.engine], None, why="declared"),
+                row("slip", r.scenario, [r.engine], None)]
+
+    def forward(model, ref, r, hor, tols, judged_by, reported_because):
+        env.calls.append(("forward", r.scenario, r.engine, judged_by, reported_because))
+        return ([row("trajectory", r.scenario, ["reference", r.engine], r.engine != "B")],
+                SimpleNamespace(t=r.t, errors=np.full((len(r.t), 8), 2.0)))
+
+    def traj_error(ref, r, t):
+        env.calls.append(("trajectory_error", r.scenario, r.engine, t))
+        return SimpleNamespace(t=r.t, errors=np.full((len(r.t), 8), 3.0))
+
+    facts = {"a": SimpleNamespace(run_difference=None, trajectory_tolerance="trajectory",
+                                  trajectory_judged_by=None),
+             "b": SimpleNamespace(run_difference=None, trajectory_tolerance=None,
+                                  trajectory_judged_by="its convergence order"),
+             "s": SimpleNamespace(run_difference="a soft contact", trajectory_tolerance=None,
+                                  trajectory_judged_by=None)}
+    for name, f in (("compare_mass_matrix", mass), ("compare_inverse", inverse),
+                    ("compare_constraints", constraints), ("constraint_series", series),
+                    ("declared_difference_rows", declared), ("compare_forward", forward),
+                    ("trajectory_error", traj_error), ("engine_facts", lambda spec: facts[spec])):
+        monkeypatch.setattr(sn, name, f)
+    env.builds = []
+
+    def setup(label, spec):
+        return SimpleNamespace(label=label, engine=spec, build=lambda m: env.builds.append(
+            (label, m.name)) or _MEngine())
+
+    env.setups = {"reference": setup("reference", "reference"), "A": setup("A", "a"),
+                  "B": setup("B", "b"), "S": setup("S", "s")}
+    return env
+
+
+def _scen_runs():
+    T = np.zeros((5, 3))
+    runs = {}
+    for name in ("check", "zigzag"):
+        runs[("reference", name)] = _run("reference", name, "inverse", T=T)
+        runs[("A", name)] = _run("A", name, "inverse", T=T)
+        runs[("B", name)] = _run("B", name, "inverse", status="failed", message="diverged " * 60)
+        runs[("S", name)] = _run("S", name, "inverse", status="not run")
+    for name in ("stability-psid0", "replay"):
+        for lab in ("reference", "A", "B", "S"):
+            runs[(lab, name)] = _run(lab, name)
+    runs[("reference", "check-forward")] = _run("reference", "check-forward", status="failed",
+                                                n=0, message="it fell")
+    runs[("A", "check-forward")] = _run("A", "check-forward")
+    runs[("reference", "stability-psid1")] = _run("reference", "stability-psid1")
+    return runs
+
+
+SCEN_NAMES = ["check", "zigzag", "stability-psid0", "replay", "check-forward", "stability-psid1"]
+SCEN_HORIZONS = {"stability-psid0": SimpleNamespace(t=0.03), "replay": SimpleNamespace(t=0.02)}
+
+
+def test_compare_scenarios_rows(scen_env):
+    scen_env.mass_raises = {"B"}
+    sec = sn.compare_scenarios("TOLS", SCEN_NAMES, scen_env.setups, _scen_runs(), SCEN_HORIZONS)
+    assert sec.title == "Every engine on every scenario"
+    got = [(r["quantity"], r["scenario"], tuple(r["engines"]), r["passed"])
+           for r in sec.comparisons]
+    assert got == [
+        ("engine run", "check", ("B",), False),
+        ("mass_matrix", "check", ("reference", "A"), True),
+        ("engine call", "check", ("B",), False),                 # its M raised: its own row
+        ("mass_matrix", "check", ("reference", "S"), True),
+        ("torques", "check", ("reference", "A"), True),
+        ("engine run", "zigzag", ("B",), False),
+        ("mass_matrix", "zigzag", ("reference", "A"), True),
+        ("engine call", "zigzag", ("B",), False),
+        ("mass_matrix", "zigzag", ("reference", "S"), True),
+        ("torques", "zigzag", ("reference", "A"), True),
+        *((q, n, e, p) for n in ("stability-psid0", "replay") for q, e, p in (
+            ("mass_matrix", ("reference", "A"), True), ("engine call", ("B",), False),
+            ("mass_matrix", ("reference", "S"), True),
+            ("constraint_residual", ("reference",), True),
+            ("constraint_residual", ("A",), True), ("trajectory", ("reference", "A"), True),
+            ("constraint_residual", ("B",), True), ("trajectory", ("reference", "B"), False),
+            ("trajectory", ("reference", "S"), None), ("slip", ("S",), None))),
+        ("not compared", "check-forward", ("A",), False),
+        ("not compared", "stability-psid1", ("-",), False)]
+    failed_run = sec.comparisons[0]
+    assert failed_run.as_dict() == {
+        "quantity": "engine run", "scenario": "check", "model": "thesis", "engines": ["B"],
+        "max_error": None, "tolerance": None, "passed": False,
+        "localized_to": ("diverged " * 60)[:300],
+        "note": "B did not complete the run it was asked for"}
+    assert sec.comparisons[-2]["localized_to"] == "not compared: the reference's run failed (it fell)"
+    assert sec.comparisons[-1]["localized_to"].startswith(
+        "not compared: its meaningful-horizon stage failed")
+    # the engines are built once per model, for M at every scenario's states in one call
+    assert sorted(scen_env.builds) == [("A", "thesis"), ("B", "thesis"), ("S", "thesis")]
+    calls = scen_env.calls
+    assert ("declared", "stability-psid0", "S", "a soft contact", 1e-9, "rD_z", 0.03) in calls
+    assert ("forward", "replay", "A", "trajectory", "a study") in calls
+    assert ("forward", "replay", "B", None, "its convergence order") in calls
+    assert ("trajectory_error", "replay", "S", 0.02) in calls
+    assert not any(c[0] in ("forward", "declared", "trajectory_error") and c[2] == "reference"
+                   for c in calls)
+
+
+def test_compare_scenarios_table_and_figures(scen_env):
+    runs = _scen_runs()
+    sec = sn.compare_scenarios("TOLS", SCEN_NAMES, scen_env.setups, runs, SCEN_HORIZONS)
+    (table,) = _tables(sec)
+    assert table.header == ("quantity", "scenario", "engines", "max error", "tolerance",
+                            "verdict", "where")
+    assert table.rows[0] == ("engine run", "check", "B", "-", "-", "FAIL", ("diverged " * 60)[:300])
+    assert table.rows[1] == ("mass_matrix", "check", "reference vs A", "1.0e-09", "1.0e-06",
+                             "pass", "-")
+    by_q = {(r[0], r[1], r[2]): r for r in table.rows}
+    assert by_q[("trajectory", "replay", "reference vs S")][5] == "reported: declared"
+    assert by_q[("slip", "replay", "S")][5] == "reported"
+    from reference_model import CONSTRAINT_NAMES
+    assert f"({', '.join(CONSTRAINT_NAMES)})" in table.note     # the residuals' units named
+    assert [(f.name, f.kind) for f in sec.figures] == [
+        ("check_torques.png", "torque_overlay"), ("zigzag_torques.png", "torque_overlay"),
+        ("stability-psid0_trajectories.png", "trajectory_overlay"),
+        ("replay_trajectories.png", "trajectory_overlay"),
+        ("constraint_residuals.png", "constraint_residuals"),
+        ("stability_theta.png", "stability_study"), ("replay_vs_zigzag.png", "replay_vs_zigzag")]
+    torques, _, traj, _, resid, stab, replay = sec.figures
+    # the runs with torques (B's failed run has none)
+    assert torques.data["scenario"] == "check" and list(torques.data["runs"]) == ["reference", "A"]
+    assert set(traj.data) == {"scenario", "runs", "errors", "horizon", "threshold"}
+    assert list(traj.data["runs"]) == ["reference", "A", "B", "S"]
+    assert traj.data["horizon"] == 0.03 and traj.data["threshold"] == sn.HORIZON_THRESHOLD
+    assert list(traj.data["errors"]) == ["A", "B", "S"]
+    np.testing.assert_array_equal(traj.data["errors"]["A"][1], np.full(5, 2.0))   # compare_forward's
+    np.testing.assert_array_equal(traj.data["errors"]["S"][1], np.full(5, 3.0))   # trajectory_error's
+    assert resid.data["bound"] == 2e-3 and list(resid.data["panels"]) == ["stability-psid0", "replay"]
+    t, c0, rest = resid.data["panels"]["replay"]["A"]
+    assert np.array_equal(t, runs[("A", "replay")].t) and np.all(c0 == 0.5) and np.all(rest == 0.5)
+    assert list(stab.data["runs"]) == ["reference", "A", "B", "S"]
+    assert list(stab.data["runs"]["A"]) == ["stability-psid0"]
+    t, theta, status, t_end = stab.data["runs"]["A"]["stability-psid0"]
+    assert status == "completed" and t_end == 0.04 and theta.shape == (5,)
+    assert list(replay.data["replays"]) == ["reference", "A", "B", "S"]
+    assert len(replay.data["zigzag"]) == 3
+    # the table comes before the figures
+    kinds = [type(b).__name__ for b in sec.blocks]
+    assert kinds.index("Table") < kinds.index("Figure")
+
+
+def test_compare_scenarios_without_forward_or_replay_runs_draws_only_what_it_has(scen_env):
+    runs = {k: r for k, r in _scen_runs().items() if k[1] != "replay"}
+    sec = sn.compare_scenarios("TOLS", ["check"], scen_env.setups, runs, {})
+    assert [f.name for f in sec.figures] == ["check_torques.png"]     # no replay: no overlay
+    runs[("reference", "check")] = _run("reference", "check", "inverse", T=None)
+    runs[("A", "check")] = _run("A", "check", "inverse", T=None)
+    sec = sn.compare_scenarios("TOLS", ["check"], scen_env.setups, runs, {})
+    assert sec.figures == []
