@@ -545,7 +545,16 @@ def test_the_option_studys_table():
         ("0.01", "2.50e-03", "3.900000", "-0.100000", "6.000000", "-0.250000",
          "reported: model difference"),
         ("0.02", "-", "-", "-", "-", "-", "not run"))
-    assert "0-10 m/s" in table.note
+    # the note says how to read a shift and a 'none'
+    assert table.note.startswith("shift: the engine's critical speed minus the reference's")
+    assert table.note.endswith("; none: no such speed in 0-10 m/s")
+
+
+def test_a_value_not_run_does_not_stop_the_values_after_it():
+    sec, summary = os_.option_study_section(SYM, _study(), "bench", OS_VALUES[::-1], EE_TOL)
+    assert [r[0] for r in _tables(sec)[0].rows] == ["0.02", "0.01", "0"]
+    assert [e["value"] for e in summary["values"]] == [0.02, 0.01, 0.0]
+    assert len(sec.comparisons) == 1 + 3 + 3
 
 
 def test_a_shift_of_a_critical_speed_keeps_six_decimals_down_to_half_a_micrometre_per_second():
@@ -671,6 +680,10 @@ def test_the_option_study_stage_asks_one_task_per_value_and_model_it_models():
         ("k.toml", 0.0), ("k.toml", 0.01), ("k.toml", 0.02)]
     assert stage._models(_os_plan(models), SYM) == (["k.toml"], [models[1]])
     assert stage._models(_os_plan(), SYM) == (["benchmark"], [])
+    two = (models[0], SimpleNamespace(spec="k2.toml", name="K2", contact="knife-edge"))
+    assert [t.key[2:] for t in stage.tasks(_os_plan(two))] == [
+        ("k.toml", 0.0), ("k.toml", 0.01), ("k.toml", 0.02), ("k2.toml", 0.0), ("k2.toml", 0.01),
+        ("k2.toml", 0.02)]
     # --quick: only the declared quick values, and no study without them
     assert stage.tasks(_os_plan(quick=True)) == []
     quick = _os_plan(quick=True, studies=(_study(quick_values=(0.0,)),))
@@ -721,6 +734,12 @@ def test_the_option_study_stage_assembles_per_model_failures_and_contacts_it_doe
     out = stage.assemble(_os_plan(), two)
     assert len(out.sections) == 2 and len(out.summary["option_studies"]) == 2
     assert stage.assemble(_os_plan(), {}).summary == {}
+    # an engine modelling two contacts names both in the reason
+    both = _os_plan(models)
+    both.facts["sym.spec"].contacts = ("knife-edge", "disc")
+    (limitation,) = stage.assemble(both, {}).sections
+    assert limitation.comparisons[0]["localized_to"] == (
+        "not run on this model: SymB models the front contact(s) knife-edge, disc, not 'torus'")
     only_failed = stage.assemble(_os_plan(), {bad: TaskResult(bad, None, 0.3, "boom")})
     assert [s.title for s in only_failed.sections] == ["Option study: SymB at crown_radius = 0.02 m"]
     assert only_failed.summary == {}
