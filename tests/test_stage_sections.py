@@ -2315,3 +2315,18 @@ def test_compare_scenarios_without_forward_or_replay_runs_draws_only_what_it_has
     runs[("A", "check")] = _run("A", "check", "inverse", T=None)
     sec = sn.compare_scenarios("TOLS", ["check"], scen_env.setups, runs, {})
     assert sec.figures == []
+
+
+# -- the stages in report order (comparisons/stages/catalog.py) -----------------------------
+
+def test_the_stages_in_report_order_and_the_sections_words():
+    """`run --sections` takes these words (README, docs/engines.md: 'contact' selects the
+    soft-contact study); the stages without one always run."""
+    from comparisons.stages.catalog import SECTIONS, STAGES
+    assert [(s.name, s.section) for s in STAGES] == [
+        ("stability", None), ("terms", "terms"), ("fixed-step", "fixed-step"),
+        ("energy", "energy"), ("soft-contact", "contact"), ("benchmark", "benchmark"),
+        ("linear-check", None), ("engine-eigenvalues", "eigenvalues"),
+        ("option-study", "option-study"), ("faults", "faults")]
+    assert SECTIONS == ("terms", "fixed-step", "energy", "contact", "benchmark", "eigenvalues",
+                        "option-study", "faults")
