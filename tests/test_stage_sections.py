@@ -2330,3 +2330,157 @@ def test_the_stages_in_report_order_and_the_sections_words():
         ("option-study", "option-study"), ("faults", "faults")]
     assert SECTIONS == ("terms", "fixed-step", "energy", "contact", "benchmark", "eigenvalues",
                         "option-study", "faults")
+
+
+# -- the soft-contact study's stage and ranking (comparisons/stages/soft_contact.py) --------
+
+from comparisons.judgments.contact_ranking import ContactRow  # noqa: E402
+from comparisons.stages import soft_contact as sct  # noqa: E402
+
+
+def _contact_row(engine, error, reached=True, model="thesis-disc", lift=0.45, simulated=0.5):
+    return ContactRow(engine, engine.upper(), model, "stability-psid10", 0.43, reached, error,
+                      2 * error, 1e-3, 2e-3, 3e-5, 1e-5, lift, simulated, 1.5, "its defaults")
+
+
+def test_the_contact_studys_windows_and_simulated_seconds():
+    from engines.facts import Refinement, SoftContact
+    assert (sct.SCENARIO, sct.MODEL, sct.STUDY_TIME) == ("stability-psid10", "thesis-disc", 0.2)
+    assert sct.window(False) == sct.WINDOW == 0.5 and sct.window(True) == sct.QUICK_WINDOW == 0.5
+    soft = SoftContact(refinements=(Refinement("h", "k", (1, 2, 3, 4), dict, (1, 2)),
+                                    Refinement("k", "h", (1, 2, 3, 4), dict, None)))
+    # full: the default run (0.5 s) and 8 refinement runs of 0.2 s; quick: 2 of the first series
+    assert math.isclose(sct._study_seconds(soft, False), 0.5 + 8 * 0.2)
+    assert math.isclose(sct._study_seconds(soft, True), 0.5 + 2 * 0.2)
+    assert sct._per_second(1.5, SimpleNamespace(t_end=0.5)) == 3.0
+    assert math.isnan(sct._per_second(1.5, SimpleNamespace(t_end=0.0)))
+    run, seconds = sct._timed(lambda **o: o, a=1)
+    assert run == {"a": 1} and 0.0 <= seconds < 5.0
+    facts = SimpleNamespace(run_setups=(SimpleNamespace(settings=""),
+                                        SimpleNamespace(settings="h = 1e-4 s")))
+    assert sct._settings_line(facts) == "h = 1e-4 s"
+    assert sct._settings_line(SimpleNamespace(run_setups=())) == ""
+
+
+def test_the_ranking_table_and_summary():
+    rows = [_contact_row("b", 2e-3), _contact_row("a", 1e-3),
+            _contact_row("c", None, reached=False, lift=None, simulated=0.31)]
+    sec = sct.ranking_section(rows)
+    assert sec.title == "Soft-contact engines side by side: how close to ideal rolling"
+    (table,) = _tables(sec)
+    assert table.header == ("rank", "engine", "error at 0.43 s [rad, m]", "max error up to it",
+                            "slip RMS [m/s]", "slip max [m/s]", "penetration max [m]",
+                            "penetration RMS [m]", "first lift-off [s]",
+                            "run time per simulated second [s]")
+    assert table.rows == (
+        ("1", "A", "1.00e-03", "2.00e-03", "1.00e-03", "2.00e-03", "3.00e-05", "1.00e-05",
+         "0.45", "3"),
+        ("2", "B", "2.00e-03", "4.00e-03", "1.00e-03", "2.00e-03", "3.00e-05", "1.00e-05",
+         "0.45", "3"),
+        ("3", "C", "ends at 0.31 s", "-", "1.00e-03", "2.00e-03", "3.00e-05", "1.00e-05", "-",
+         "4.8"))
+    assert "(3: A, B, C)" in _texts(sec)[0]
+    summary = sct.ranking_summary(rows)
+    assert [r.pop("rank") for r in summary["rows"]] == [1, 2, 3]
+    assert summary == {"model": "thesis-disc", "scenario": "stability-psid10", "horizon_s": 0.43,
+                       "ranked_by": "error_at_horizon, then slip_rms; runs ending before the "
+                                    "horizon last",
+                       "rows": [rows[1].as_dict(), rows[0].as_dict(), rows[2].as_dict()]}
+    other = sct.ranking_section([_contact_row("a", 1e-3, model="mine")])
+    assert other.title.endswith("how close to ideal rolling on mine")
+
+
+def _soft_plan(models=(), quick=False, scenarios=("check", "stability-psid0", "stability-psid5")):
+    from engines.facts import Refinement, SoftContact
+    soft = SoftContact(refinements=(Refinement("h", "k", (1, 2), dict, (1,)),))
+    facts = {"reference": SimpleNamespace(spec="reference", soft_contact=None),
+             "mj": SimpleNamespace(spec="mj", label="MJ", soft_contact=soft,
+                                   costs=SimpleNamespace(run_per_second=2.0)),
+             "p": SimpleNamespace(spec="p", label="P", soft_contact=None)}
+    opts = SimpleNamespace(models=models, quick=quick, scenarios=scenarios)
+    from comparisons.stages.stage import Plan
+    return Plan(opts, (), facts)
+
+
+def test_the_soft_contact_stage_tasks():
+    stage = sct.SoftContactStage()
+    assert (stage.name, stage.section) == ("soft-contact", "contact")
+    stab = ("stability-psid0", "stability-psid5")
+    tasks = stage.tasks(_soft_plan())
+    assert [(t.key, t.func, t.args, t.label, t.engine) for t in tasks] == [
+        (("claims-reference", "reference", "thesis-disc"), scc.reference_claims_on_disc, (stab,),
+         "reference: the stability runs on thesis-disc", None),
+        (("study", "mj", "thesis-disc"), sct.contact_study, ("mj", False),
+         "MJ contact study", "mj"),
+        (("claims", "mj", "thesis-disc"), scc.claims_on_disc, ("mj", stab),
+         "MJ: the stability claims on thesis-disc", "mj")]
+    assert [t.cost for t in tasks] == pytest.approx([0.3 * 2, 2.0 * (0.5 + 2 * 0.2),
+                                                     2.0 * 2.0 * 2])
+    quick = stage.tasks(_soft_plan(quick=True))             # no claims in --quick
+    assert [t.key for t in quick] == [("study", "mj", "thesis-disc")]
+    assert quick[0].args == ("mj", True) and quick[0].cost == pytest.approx(2.0 * (0.5 + 0.2))
+    assert [t.key for t in stage.tasks(_soft_plan(scenarios=("check",)))] == [
+        ("study", "mj", "thesis-disc")]                     # no stability scenario: no claims
+    models = (SimpleNamespace(spec="d.toml", contact="disc"),
+              SimpleNamespace(spec="t.toml", contact="thesis"))
+    on = stage.tasks(_soft_plan(models))
+    assert [(t.key, t.args, t.label) for t in on] == [
+        (("study", "mj", "d.toml"), ("mj", False, "d.toml"), "d.toml: MJ contact study")]
+    assert stage.tasks(_soft_plan(models[1:])) == []        # no disc-contact model
+    no_soft = _soft_plan()
+    no_soft.facts.pop("mj")
+    assert stage.tasks(no_soft) == []
+
+
+def test_the_soft_contact_stage_assembles_rankings_studies_claims_and_failures():
+    from comparisons.stages.pool import TaskResult
+    stage, plan = sct.SoftContactStage(), _soft_plan()
+    plan.facts["mj2"] = SimpleNamespace(spec="mj2", label="MJ2", soft_contact=None)
+    s1, s2, s3 = (sct.Section(f"study {i}") for i in (1, 2, 3))
+    ref = scc.DiscClaims("reference", "reference", (_claim("stability-a", "reference"),))
+    mine = scc.DiscClaims("mj", "MJ", (_claim("stability-a", "mj", "fails", "it fell"),))
+    results = {
+        ("study", "mj", "thesis-disc"): TaskResult(None, sct.ContactStudy(s1, _contact_row(
+            "mj", 2e-3)), 1.0),
+        ("study", "mj2", "thesis-disc"): TaskResult(None, sct.ContactStudy(s2, _contact_row(
+            "mj2", 1e-3)), 1.0),
+        ("study", "mj", "d.toml"): TaskResult(None, sct.ContactStudy(s3, None), 1.0),
+        ("study", "p", "thesis-disc"): TaskResult(None, None, 1.0, "boom"),
+        ("claims-reference", "reference", "thesis-disc"): TaskResult(None, ref, 1.0),
+        ("claims", "mj", "thesis-disc"): TaskResult(None, mine, 1.0),
+        ("claims", "mj2", "thesis-disc"): TaskResult(None, None, 1.0, "bang")}
+    out = stage.assemble(plan, results)
+    titles = [s.title for s in out.sections]
+    assert titles == ["Soft-contact engines side by side: how close to ideal rolling",
+                      "study 1", "study 2", "study 3", "P contact study",
+                      "The thesis's stability claims on thesis-disc: the soft-contact engines",
+                      "MJ2 claims on thesis-disc"]
+    ranking = out.sections[0]
+    assert [r[1] for r in _tables(ranking)[0].rows] == ["MJ2", "MJ"]
+    assert [s["model"] for s in out.summary["soft_contact_ranking"]] == ["thesis-disc"]
+    claims = out.sections[5]
+    assert _tables(claims)[0].header == ("claim", "reference thesis-disc", "mj thesis-disc")
+    # the reference's claims task failed: the table without its column, and its failure
+    results[("claims-reference", "reference", "thesis-disc")] = TaskResult(None, None, 1.0, "x")
+    out = stage.assemble(plan, results)
+    assert [s.title for s in out.sections][-3:] == [
+        "The thesis's stability claims on thesis-disc: the soft-contact engines",
+        "MJ2 claims on thesis-disc", "reference: the stability runs on thesis-disc"]
+    assert _tables(out.sections[-3])[0].header == ("claim", "mj thesis-disc")
+    only = stage.assemble(plan, {("study", "mj", "d.toml"): TaskResult(None, sct.ContactStudy(
+        s3, None), 1.0)})
+    assert [s.title for s in only.sections] == ["study 3"]
+    assert only.summary == {"soft_contact_ranking": []}
+
+
+def test_the_soft_contact_stage_revises_the_claims_of_the_engines_it_judged():
+    from comparisons.stages.pool import TaskResult
+    claims = [_claim("stability-a", "mj", "not assessed"), _claim("stability-a", "p", "holds")]
+    mine = scc.DiscClaims("mj", "MJ", (_claim("stability-a", "mj", "fails", "it fell"),))
+    results = {("claims", "mj", "thesis-disc"): TaskResult(None, mine, 1.0),
+               ("claims", "x", "thesis-disc"): TaskResult(None, None, 1.0, "bang"),
+               ("study", "mj", "thesis-disc"): TaskResult(None, "not claims", 1.0)}
+    revised = sct.SoftContactStage().revise_claims(_soft_plan(), results, claims)
+    assert revised[0]["verdict"] == "fails"
+    assert revised[0]["evidence"] == scc.on_disc("MJ") + "it fell"
+    assert revised[1] == claims[1]
