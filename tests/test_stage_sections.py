@@ -911,7 +911,9 @@ def test_engine_terms_rows_not_run_failed_and_the_mass_matrix_figure(terms_env):
     assert [(s, m, o) for s, m, o in terms_env.loads if s != "reference"] == [
         ("pinocchio", "thesis", {"k": 1}), ("pinocchio", "thesis-disc", {"k": 1})]
     assert [n for _, _, n, _ in terms_env.compares] == [5]
-    assert terms_env.compares[0][3] is TERM_TOL
+    ref, eng, _, tols = terms_env.compares[0]
+    assert tols is TERM_TOL and isinstance(eng, _TermsEngine)
+    assert (ref.name, ref.model.name) == ("reference", "thesis-disc")   # the reference's side
     (table,) = _tables(sec)
     assert table.header == tm.TERM_HEADER
     assert table.rows == (
@@ -920,7 +922,8 @@ def test_engine_terms_rows_not_run_failed_and_the_mass_matrix_figure(terms_env):
         ("thesis-disc", "gravity", "3.0e-06", "1e-08", "FAIL", "Qgrav[phi]"))
     assert [(r["scenario"], r["model"], r["engines"]) for r in sec.comparisons] == [
         ("random-states-5", "thesis-disc", ["reference", "pinocchio"])] * 2
-    assert "at 5 deterministic states" in _texts(sec)[0] and "{'k': 1}" in _texts(sec)[0]
+    # the setup the terms were compared under: the spec, its options, the number of states
+    assert _texts(sec)[0].startswith("`pinocchio` with {'k': 1} at 5 deterministic states")
     (fig,) = sec.figures
     assert (fig.name, fig.kind) == ("mass_matrix_error_pinocchio_thesis-disc.png", "matrix_error")
     assert set(fig.data) == {"relative", "labels", "tolerance", "title", "colorbar"}
@@ -944,7 +947,7 @@ def test_engine_terms_on_a_users_model_a_failed_build_and_no_figure_without_m(te
                            "thesis": _TermsEngine}
     sec = tm.engine_terms(TERM_TOL, "pinocchio", {}, 3, ("benchmark", "thesis"))
     assert sec.title == "Reference vs Pinocchio on benchmark, thesis, term by term"
-    assert not _texts(sec)[0].startswith("`pinocchio` with")
+    assert _texts(sec)[0].startswith("`pinocchio` at 3 deterministic states")
     assert _tables(sec)[0].rows[0] == ("benchmark", "-", "-", "-", "FAIL",
                                        "RuntimeError: it broke badly")
     assert sec.comparisons[0].as_dict() == {
