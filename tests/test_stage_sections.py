@@ -93,6 +93,7 @@ def test_the_speed_table_rows_say_none_where_a_side_found_no_speed():
     assert capsize["localized_to"] == "closed form 6.000000000000 m/s, linearization none m/s"
     assert other["localized_to"] == "none in 0.5-9 m/s on both"
     assert weave["note"] == "in 0.5-9 m/s; none on both counts as agreement"
+    assert [r["tolerance"] for r in (weave, capsize, other)] == [1e-9, 1e-9, 1e-9]
 
 
 @pytest.mark.parametrize("note, ends", [("", "m/s, the closed form's by its own root finding "
@@ -117,6 +118,7 @@ def test_the_stage_asks_one_task_per_model_and_assembles_failures_as_failing_row
                                                         ("b.toml", linear_check, ("TOLS", "b.toml"))]
     assert [t.label for t in tasks] == ["A: linearization vs the closed form",
                                         "B: linearization vs the closed form"]
+    assert [t.cost for t in tasks] == [0.1, 0.1]     # the scheduler's estimate (s)
     ok = linear_check_section(CHECK)
     out = LinearCheckStage().assemble(plan, {"a.toml": TaskResult("a.toml", ok, 0.1),
                                              "b.toml": TaskResult("b.toml", None, 0.1, "boom")})
@@ -126,6 +128,20 @@ def test_the_stage_asks_one_task_per_model_and_assembles_failures_as_failing_row
     assert [r["passed"] for r in second.comparisons] == [False]
     assert second.comparisons[0]["localized_to"] == "boom"
     assert (LinearCheckStage.name, LinearCheckStage.section) == ("linear-check", None)
+
+
+def test_the_stage_judges_over_the_stability_sections_speed_range(monkeypatch):
+    """`linear_check` looks for the critical speeds where the stability section does
+    (`stability.SPEED_RANGE`): moved to 1-5 m/s, the benchmark's weave speed (4.29 m/s) is
+    still found and its capsize speed (6.02 m/s) is outside."""
+    from comparisons.judgments.tolerances import load_tolerances
+    from comparisons.stages import linear_check as lc
+    monkeypatch.setattr(lc, "SPEED_RANGE", (1.0, 5.0))
+    sec = lc.linear_check(load_tolerances(), "benchmark")
+    speeds = {r["quantity"]: r for r in sec.comparisons if r["quantity"].endswith("speed")}
+    assert all(r["note"].startswith("in 1-5 m/s;") for r in speeds.values())
+    capsize = speeds["linearization vs closed form: capsize speed"]
+    assert capsize["closed_form"] is None and capsize["linearization"] is None
 
 
 # -- the engines' linearization section (comparisons/stages/engine_eigenvalues.py) ----------
