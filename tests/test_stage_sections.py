@@ -1670,11 +1670,13 @@ class _Sim:
 def fx_env(monkeypatch):
     import engines.facts
     env = SimpleNamespace(sims=[], studies=[], verdicts={})
-    monkeypatch.setattr(engines.facts, "engine_facts", lambda spec: FX_FACTS)
+    monkeypatch.setattr(engines.facts, "engine_facts", lambda spec: {"ex.spec": FX_FACTS}[spec])
     monkeypatch.setattr(fx, "load_engine", lambda spec, model, **o: _Sim(env.sims, spec, model, o))
+    env.factories = []
 
     def study(ref_model, factory, sc, steps, horizon, runs):
         env.studies.append((ref_model.name, sc.name, steps, horizon, [r.key for r in runs]))
+        env.factories.append(factory(0.125).key)     # what the study would build at a step
         verdict = env.verdicts.get(ref_model.name, "converges")
         return SimpleNamespace(verdict=verdict, errors=(4e-4, 1e-4), order=2.004,
                                difference=1.5e-3, steps=steps, verdict_reason="why " + verdict)
@@ -1693,7 +1695,13 @@ def test_the_convergence_study_on_the_thesis_bicycle(fx_env):
     assert runs == {("tree", "thesis-disc"), ("red", "thesis-disc"), ("tree", "thesis")}
     assert len(fx_env.sims) == 3 * 4
     assert [o["step"] for _, _, o, *_ in fx_env.sims[:4]] == list(steps)
-    assert all(s[3] == "stability-psid10" and s[4] == 0.5 for s in fx_env.sims)
+    assert all(s[0] == "ex.spec" and s[3] == "stability-psid10" and s[4] == 0.5
+               for s in fx_env.sims)
+    # the study's own factory builds the same engine at the step it is given
+    assert fx_env.factories == [("ex.spec", "thesis-disc", {"build": "tree", "step": 0.125}),
+                                ("ex.spec", "thesis-disc", {"build": "red", "step": 0.125}),
+                                ("ex.spec", "thesis-disc", {"build": "tree", "step": 0.125}),
+                                ("ex.spec", "thesis", {"build": "tree", "step": 0.125})]
     assert [(r, s, st, h) for r, s, st, h, _ in fx_env.studies] == [
         ("thesis-disc", "stability-psid10", steps, 0.5), ("thesis-disc", "stability-psid10", steps, 0.5),
         ("thesis", "stability-psid10", steps, 0.5), ("thesis", "stability-psid10", steps, 0.5)]
@@ -1778,17 +1786,20 @@ def test_a_trajectory_part_up_to_the_horizon(monkeypatch, fx_env):
         return e
 
     monkeypatch.setattr(fx, "reference_run", lambda model, sc: got.update(ref=(model.name, sc.name)) or ref)
-    monkeypatch.setattr(fx, "reference_horizon",
-                        lambda model, sc, reference: got.update(hor=(model.name, reference)) or hor)
+    monkeypatch.setattr(fx, "reference_horizon", lambda model, sc, reference: got.update(
+        hor=(model.name, sc.name, reference)) or hor)
     monkeypatch.setattr(fx, "error_vs_time", errors)
     part = fx.trajectory_part("ex.spec", "stability-psid0")
-    assert got["ref"] == ("thesis-disc", "stability-psid0") and got["hor"] == ("thesis-disc", ref)
+    assert got["ref"] == ("thesis-disc", "stability-psid0")
+    assert got["hor"] == ("thesis-disc", "stability-psid0", ref)
     start, step, n = SCENARIOS["stability-psid0"].grid
     cut = int(np.ceil((1.234 - start) / step)) + 3             # to the horizon and two samples
     assert cut < n
-    assert [(m, o, name, g) for _, m, o, name, _, g in fx_env.sims] == [
-        ("thesis-disc", {"build": "tree", "step": 2e-3}, "stability-psid0", (start, step, cut)),
-        ("thesis-disc", {"build": "red", "step": 2e-3}, "stability-psid0", (start, step, cut))]
+    assert [(s, m, o, name, g) for s, m, o, name, _, g in fx_env.sims] == [
+        ("ex.spec", "thesis-disc", {"build": "tree", "step": 2e-3}, "stability-psid0",
+         (start, step, cut)),
+        ("ex.spec", "thesis-disc", {"build": "red", "step": 2e-3}, "stability-psid0",
+         (start, step, cut))]
     assert got["errors"][0][0] is ref and got["errors"][0][1:] == (COORDINATES_, 1.234)
     assert part.rows == [
         ("stability-psid0", "1.23", "twin runs", "ex-tree", "3.00e-06", "theta at 0.60 s",
@@ -1820,6 +1831,14 @@ def test_a_trajectory_part_up_to_the_horizon(monkeypatch, fx_env):
     long = fx.trajectory_part("ex.spec", "stability-psid0")
     assert fx_env.sims[-1][5] == (start, step, n)
     assert long.rows[0][6] == "1.250 s (completed)"
+    # a grid that starts later: the horizon counted from its start (0.5 s: 74 steps of 0.01 s
+    # to 1.234 s, and two samples)
+    import dataclasses
+    hor.t = 1.234
+    late = dataclasses.replace(SCENARIOS["stability-psid0"], name="late", grid=(0.5, 0.01, 500))
+    monkeypatch.setitem(fx.SCENARIOS, "late", late)
+    fx.trajectory_part("ex.spec", "late")
+    assert fx_env.sims[-1][5] == (0.5, 0.01, 74 + 3)
 
 
 def test_the_trajectory_section_merges_the_parts():
