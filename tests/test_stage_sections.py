@@ -1094,6 +1094,8 @@ def test_the_fault_table():
     (table,) = _tables(sec)
     assert table.header == ("fault", "engine", "detected", "localized to", "expected", "verdict",
                             "evidence")
+    (text,) = _texts(sec)          # what the 'not observable' verdict means
+    assert "'not observable': the engine does not provide the terms the fault changes" in text
     assert table.rows == (("f1", "E", "yes", "M", "M", "localized", "ev"),
                           ("f2", "E (bench)", "no", "-", "Qv", "missed", "ev2"),
                           ("-", "F", "-", "-", "-", "not run", "why"))
@@ -1118,8 +1120,9 @@ def test_the_faults_stage_tasks_and_assemble():
     models = (SimpleNamespace(spec="d.toml", name="D", contact="disc"),
               SimpleNamespace(spec="t.toml", name="T", contact="torus"))
     (t,) = stage.tasks(Plan(opts(models), (), facts))
-    assert (t.key, t.args, t.label) == (("p", "d.toml"), ("TOLS", "p", "d.toml", (("k", 1),)),
-                                        "D: fault injection on P")
+    assert (t.key, t.func, t.args, t.cost, t.label, t.engine) == (
+        ("p", "d.toml"), fl.fault_entries, ("TOLS", "p", "d.toml", (("k", 1),)), 4.0,
+        "D: fault injection on P", "p")
     plan = Plan(opts(()), (), facts)
     e1 = {"fault": "f1", "engine": "P", "detected": True, "localized_to": "M", "expected": "M",
           "verdict": "localized", "evidence": "ev"}
@@ -1132,6 +1135,11 @@ def test_the_faults_stage_tasks_and_assemble():
     assert _tables(table)[0].rows[0][0] == "f1"
     out = stage.assemble(plan, {("p", None): TaskResult(None, None, 1.0, "boom")})
     assert out.faults == [] and [s.title for s in out.sections] == ["fault injection on P"]
+    e2 = dict(e1, fault="f2")
+    out = stage.assemble(plan, {("p", None): TaskResult(None, [e1], 1.0),
+                                ("p", "d.toml"): TaskResult(None, [e2], 1.0)})
+    assert out.faults == [e1, e2]                  # every task's entries, in one table
+    assert [r[0] for r in _tables(out.sections[0])[0].rows] == ["f1", "f2"]
 
 
 def test_localization_lines_for_the_pairs_whose_terms_failed(monkeypatch):
@@ -1139,7 +1147,11 @@ def test_localization_lines_for_the_pairs_whose_terms_failed(monkeypatch):
     from engines import UnsupportedModel
     localized = []
 
+    from comparisons.judgments.terms import random_states
+    seeded = random_states(16, seed=11).q       # the same 16 states every run
+
     def localize(model, states, engines, tolerances):
+        assert np.array_equal(states.q, seeded)
         localized.append((model.name, len(states), engines, tolerances))
         if engines == ["raises"]:
             raise ValueError("no fit")
@@ -1151,14 +1163,17 @@ def test_localization_lines_for_the_pairs_whose_terms_failed(monkeypatch):
         def build(model):
             if exc is not None:
                 raise exc
-            return built
+            return built if built == "raises" else f"{built} on {model.name}"
         return SimpleNamespace(build=build)
 
     setups = {"A": setup("engine A"), "B": setup("raises"),
-              "C": setup(exc=UnsupportedModel("no")), "D": setup(exc=OSError("gone"))}
+              "C": setup(exc=UnsupportedModel("no")), "CA": setup("engine CA"),
+              "D": setup(exc=OSError("gone")), "Z": setup("engine Z")}
     row = lambda q, engines, passed, model="thesis": {   # noqa: E731
         "quantity": q, "engines": engines, "passed": passed, "model": model}
-    comparisons = [row("mass_matrix", ["reference", "A"], False),
+    comparisons = [row("mass_matrix", ["reference", "E"], False, "a-model"),   # no setup: skipped
+                   row("mass_matrix", ["reference", "A"], False),
+                   row("mass_matrix", ["reference", "CA"], False),
                    row("gravity", ["reference", "A"], False),        # the same pair: once
                    row("mass_matrix", ["reference", "A"], False, "mine"),
                    row("torques", ["reference", "B"], False),
@@ -1169,15 +1184,20 @@ def test_localization_lines_for_the_pairs_whose_terms_failed(monkeypatch):
                    row("mass_matrix", ["reference", "G"], None),      # reported: none
                    row("trajectory", ["reference", "H"], False),      # not a term
                    row("mass_matrix", ["A"], False),                  # one engine
-                   {"quantity": "gravity", "engines": ["reference", "A"], "passed": False}]
+                   {"quantity": "gravity", "engines": ["reference", "A"], "passed": False},
+                   {"quantity": "gravity", "engines": ["reference", "Z"], "passed": False}]
     lines = fl.localization_lines("TOLS", comparisons, setups, {"mine": "benchmark"})
     assert lines == [("mine: reference vs A", "benchmark: the fork"),
                      ("thesis: reference vs A", "thesis: the fork"),
-                     ("thesis: reference vs B", "not localized: ValueError: no fit")]
+                     ("thesis: reference vs B", "not localized: ValueError: no fit"),
+                     ("thesis: reference vs CA", "thesis: the fork"),
+                     ("thesis: reference vs Z", "thesis: the fork")]   # no model: the thesis's
     assert [(m, n, e, t) for m, n, e, t in localized] == [
-        ("benchmark", 16, ["engine A"], "TOLS"), ("thesis", 16, ["engine A"], "TOLS"),
-        ("thesis", 16, ["raises"], "TOLS")]
-    assert fl.localization_lines("TOLS", comparisons[7:10], setups) == []
+        ("benchmark", 16, ["engine A on benchmark"], "TOLS"),
+        ("thesis", 16, ["engine A on thesis"], "TOLS"), ("thesis", 16, ["raises"], "TOLS"),
+        ("thesis", 16, ["engine CA on thesis"], "TOLS"), ("thesis", 16, ["engine Z on thesis"],
+                                                           "TOLS")]
+    assert fl.localization_lines("TOLS", comparisons[9:12], setups) == []
     # a model name that does not load: nothing to localize against
     assert fl.localization_lines("TOLS", [row("gravity", ["reference", "A"], False,
                                               "no-such-model")], setups) == []
