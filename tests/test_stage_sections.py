@@ -2544,3 +2544,35 @@ def test_the_soft_contact_stage_revises_the_claims_of_the_engines_it_judged():
     assert revised[0]["verdict"] == "fails"
     assert revised[0]["evidence"] == scc.on_disc("MJ") + "it fell"
     assert revised[1] == claims[1]
+
+
+def test_the_energy_section_runs_the_reference_and_each_engine_when_given_no_rows(monkeypatch):
+    asked = []
+    monkeypatch.setattr(en, "energy_rows", lambda spec, options, model: asked.append(
+        (spec, options, model)) or ([EN_ROWS[0]] if spec is None else [_drift(spec, 1e-4)]))
+    sec = en.energy_section(EN_TOL, (("p", {"k": 1}), ("q", {})), "thesis-disc")
+    assert asked == [(None, {}, "thesis-disc"), ("p", {"k": 1}, "thesis-disc"),
+                     ("q", {}, "thesis-disc")]
+    assert [r["engines"] for r in sec.comparisons] == [["reference thesis-disc"], ["p"], ["q"]]
+
+
+def test_the_energy_section_on_a_users_bicycle_and_a_not_run_row_first(monkeypatch):
+    from comparisons.stages import stability
+    monkeypatch.setattr(stability, "critical", lambda spec: {})
+    rows = [{"engine": "D", "not_run": "not run on this model: no disc"}, _drift("A", 1e-4)]
+    sec = en.energy_section(EN_TOL, (), "benchmark", rows)
+    assert sec.title.endswith("(IFToMM: 100 (Emax - Emin) / E0) on benchmark")
+    assert [r[0] for r in _tables(sec)[0].rows] == ["D", "A"]      # the row after it kept
+    assert [r["model"] for r in sec.comparisons] == ["benchmark (cv = 0)"]
+    assert _texts(sec)[0].startswith("Free roll from lean and steer pi/32 at psi_dot = 10 rad/s")
+
+
+def test_the_energy_stage_draws_no_section_when_the_reference_was_not_run():
+    from comparisons.stages.pool import TaskResult
+    from comparisons.stages.stage import Plan
+    plan = Plan(SimpleNamespace(models=(), tolerances=EN_TOL, options_for=dict), (),
+                {"reference": SimpleNamespace(spec="reference")})
+    ref_not_run = [{"engine": "reference thesis-disc", "not_run": "not run on this model: x"}]
+    out = en.EnergyStage().assemble(plan, {(None, "thesis-disc"): TaskResult(None, ref_not_run,
+                                                                            1.0)})
+    assert out.sections == []
