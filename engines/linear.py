@@ -189,9 +189,14 @@ def critical_speeds(eigenvalues: Callable[[np.ndarray], np.ndarray], speeds: tup
     if weave is not None:
         above = grid > weave
         grid, d = np.r_[weave, grid[above]], np.r_[det(weave), d[above]]
-    hits = np.flatnonzero(np.sign(d[:-1]) * np.sign(d[1:]) < 0)
+    # a sign change between consecutive non-zero samples; samples exactly zero between them
+    # are the crossing itself (np.sign(0) = 0 would hide it from a product of neighbours)
+    sign = np.sign(d)
+    nonzero = np.flatnonzero(sign != 0)
+    change = np.flatnonzero(sign[nonzero[:-1]] * sign[nonzero[1:]] < 0)
     capsize = None
-    if hits.size:
-        i = int(hits[0])
-        capsize = float(brentq(det, grid[i], grid[i + 1], xtol=xtol))
+    if change.size:
+        a, b = int(nonzero[change[0]]), int(nonzero[change[0] + 1])
+        capsize = (float(grid[a + 1]) if b > a + 1 else
+                   float(brentq(det, grid[a], grid[b], xtol=xtol)))
     return weave, capsize

@@ -92,6 +92,28 @@ def test_critical_speeds_of_any_eigenvalues_are_the_references_own():
     assert abs(w3 - w) < 1e-10 and c3 is not None and abs(c3 - c) < 1e-10
 
 
+def test_a_capsize_crossing_on_a_grid_point_is_found():
+    """Hand-made eigenvalues: a weave pair whose real part is 4 - v (crossing at 4 m/s, off
+    the grid's 0.5 m/s points only by brentq's tolerance) and a real capsize root 6 - v, zero
+    exactly at the grid point 6.0 m/s: the product of the four changes sign there, so the
+    capsize speed is 6.0 (np.sign(0) = 0 had hidden the change from the neighbours' product,
+    and the search returned None). Off the grid, brentq's root."""
+    def lam(v):
+        v = np.atleast_1d(np.asarray(v, dtype=float))
+        return np.stack([(4.0 - v) + 2j, (4.0 - v) - 2j, (6.0 - v) + 0j, -3.0 + 0j * v], axis=1)
+
+    w, c = critical_speeds(lam, (0.0, 10.0))
+    assert abs(w - 4.0) < 1e-10
+    assert c == 6.0
+    # the grid 0, 0.7, ... 9.8 has no point at 6: brentq's root, to 1e-12
+    w, c = critical_speeds(lam, (0.0, 9.8), step=0.7)
+    assert abs(c - 6.0) < 1e-10
+    # a zero at the top of the range with nothing above it is no crossing, nor is a root
+    # that stays positive: none
+    assert critical_speeds(lam, (0.0, 6.0))[1] is None
+    assert critical_speeds(lam, (0.0, 5.5))[1] is None
+
+
 def _check(got, model, difference=""):
     ref = model.eigenvalues(V)
     crit = (weave_speed(model, (0.0, 10.0)), capsize_speed(model, (0.0, 10.0)))
