@@ -209,3 +209,42 @@ def test_model_difference_reports_the_error_ratio():
     got, why = _verdict(h, e, fit_order(h, e)[0])
     assert got == "model difference"
     assert "= 1.04 over 8x" in why and "5.00e-02" in why
+
+
+# -- compare_forward's row, field by field (issue 24's mutation round) --------------------------
+
+def test_an_error_exactly_at_the_tolerance_passes_and_is_not_past_the_threshold():
+    """yc is 0 in the reference motion, so yc off by exactly 1e-6 gives an error of exactly
+    1e-6: [trajectory]'s tolerance is the largest accepted error (tolerances.toml), and the
+    threshold names what goes past it, not what reaches it."""
+    assert TRAJ_TOL == 1e-6
+    ref, other = make_run(), make_run("pinocchio", part_at=0.3, size=1e-6, coord=YC)
+    (c,), te = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert c["max_error"] == 1e-6 and c["passed"] is True
+    assert c["localized_to"] == "none past 1e-6; largest: yc"
+    assert te.first == "-"
+    # the errors themselves: (grid times, 8 coordinates), yc off from 0.3 s on
+    assert te.errors.shape == (101, 8)
+    assert np.all(te.errors[te.t >= 0.3 - 1e-12, YC] == 1e-6)
+    assert np.all(te.errors[te.t < 0.3 - 1e-12] == 0.0)
+
+
+def test_the_rows_note_and_why_say_who_judges_it():
+    ref, other = make_run(), make_run("pinocchio", part_at=0.3, size=1e-3)
+    (same,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert same["note"] == "same integrator and formulation as the reference: judged"
+    assert same["why"] == "" and same["localized_to"] == "first past 1e-6: theta at 0.30 s; largest: theta"
+    (own,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS,
+                                judged_by="trajectory_conformance")
+    assert own["note"] == "its own integrator: judged by [trajectory_conformance]"
+    assert own["tolerance"] == TOLS["trajectory_conformance"].tolerance and own["why"] == ""
+    assert own["passed"] is True       # 1e-3 against 5e-2
+    (rep,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS, judged_by=None)
+    assert rep["note"] == "reported here, judged by its convergence order"
+    assert rep["why"] == "judged by its convergence order"
+
+
+def test_thresholds_are_written_short():
+    from comparisons.judgments.scenario_compare import _short
+    assert (_short(1e-6), _short(2.5e-12), _short(1e6), _short(3e15)) == (
+        "1e-6", "2e-12", "1e+6", "3e+15")
