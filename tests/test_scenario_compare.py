@@ -129,3 +129,23 @@ def test_a_run_without_samples_has_no_constraint_residual(thesis):
                    "engines": ["mujoco"], "max_error": None,
                    "tolerance": TOLS["constraint_residual"].tolerance, "passed": None,
                    "localized_to": "-", "note": "no samples (failed)"}
+
+
+def test_errors_exactly_at_the_tolerance_pass_and_one_sample_is_measured(thesis):
+    """A tolerance is the largest accepted error (tolerances.toml). Torques: a reference of
+    zeros (scale max(1, 0) = 1) and one torque off by exactly the tolerance. Constraints: the
+    rigid translation at exactly 1e-3 m/s, [constraint_residual]'s 1e-3 (the model gives 1e-3
+    to the bit: vC_x = xc_dot at rest). A run of one sample is measured like any other."""
+    tol_T = TOLS["torques"].tolerance
+    T, lam = np.zeros((4, 3)), np.ones((4, 5))
+    T2 = T.copy()
+    T2[3, 2] = tol_T
+    torques, _ = compare_inverse(_inverse("reference", T, lam), _inverse("e", T2, lam), TOLS)
+    assert torques["max_error"] == tol_T and torques["passed"] is True
+    q = _upright(thesis, 1)
+    dq = np.zeros((1, 8))
+    dq[0, 0] = 1e-3
+    row = compare_constraints(thesis, Run("mujoco", "check", "thesis", "forward", "completed",
+                                          "", 0.0, T4[:1], q, dq), TOLS)
+    assert row["max_error"] == 1e-3 == TOLS["constraint_residual"].tolerance
+    assert row["passed"] is True and row["localized_to"] == "C[vC_x] at t = 0.00 s"
