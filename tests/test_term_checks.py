@@ -13,7 +13,7 @@ import pytest
 from comparisons.judgments.term_checks import (COPY_SOURCE, TERM_TOLERANCE, Block, TermCheck,
                                                check_block, check_terms, engine_terms, extract,
                                                model_terms, solve_values, term_blocks)
-from comparisons.judgments.terms import random_states
+from comparisons.judgments.terms import States, random_states
 from comparisons.judgments.tolerances import Tolerance, load_tolerances
 from engines import Engine, load_engine
 
@@ -229,3 +229,51 @@ def test_check_terms_checks_every_term_of_every_engine(thesis):
     # Qgrav 1e-3 relative everywhere, judged relative to max |Qgrav| per state: 1e-3
     assert checks[1].max_error == pytest.approx(1e-3, rel=1e-9)
     assert checks[1].tolerance == TOLS["gravity"].tolerance
+
+
+def test_what_an_engine_lacks_is_not_asked_and_a_copy_keeps_its_own_values(thesis):
+    """An engine with M alone is asked for M alone (not generalized_forces, which would
+    raise CapabilityError). A non-symmetric M from inverse_dynamics keeps its orientation in
+    the copy: column k is ID(q, 0, e_k) - ID(q, 0, 0), not row k. Qgrav's scale at rest
+    (dq = 0: no Qv) is its own largest entry, which also bounds Qv's (Qv's parts: Qv, Qgrav)."""
+    class OnlyM(Engine):
+        name = "only-m"
+        capabilities = frozenset({"mass_matrix"})
+
+        def mass_matrix(self, q):
+            return self.model.mass_matrix(q)
+
+    terms, copies, solve = extract(OnlyM(thesis), STATES, extras=True)
+    assert list(terms) == ["M"] and copies == {} and solve is None
+
+    U = np.triu(np.ones((8, 8)))                       # not symmetric
+
+    class Skewed(Engine):
+        name = "skewed"
+        capabilities = frozenset({"inverse_dynamics"})
+
+        def inverse_dynamics(self, q, dq, ddq):
+            return np.einsum("ij,nj->ni", U, np.broadcast_to(ddq, (len(q), 8)))
+
+    _, copies, _ = extract(Skewed(thesis), STATES, extras=True)
+    np.testing.assert_array_equal(copies["M"], np.broadcast_to(U, (4, 8, 8)))
+    rest = States(STATES.q, np.zeros_like(STATES.dq), STATES.ddq, STATES.T)
+    ref = model_terms(thesis, rest)
+    (qv,) = term_blocks(ref, {"e": {"Qv": ref["Qv"]}}, TOLS)
+    for k in range(4):
+        assert qv.scale[k] == max(1.0, np.abs(ref["Qgrav"][k]).max())
+        assert np.abs(ref["Qv"][k]).max() < 1e-9 < np.abs(ref["Qgrav"][k]).max()
+
+
+def test_a_copy_block_compares_the_copys_values_and_mirrors_with_other_errors_are_both_named(
+        thesis):
+    ref = model_terms(thesis, STATES)
+    copy = ref["Qgrav"] + 1.0
+    blocks = term_blocks(ref, {"e": {"Qgrav": ref["Qgrav"]}}, TOLS, {"e": {"Qgrav": copy}})
+    assert blocks[1].value is copy and blocks[1].reference is ref["Qgrav"]
+    M = np.tile(np.eye(8), (1, 1, 1))
+    value = M.copy()
+    value[0, 3, 6] += 3e-6
+    value[0, 6, 3] += 2e-6          # a mirror with another error: a non-symmetric M, both named
+    c = check_block(Block("e", "M", "", value, M, np.ones(1), 1e-6))
+    assert c.entries == ("M[theta, gamma]", "M[gamma, theta]")
