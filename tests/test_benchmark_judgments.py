@@ -149,3 +149,33 @@ def test_mode_fits_find_table2s_modes_in_a_sum_of_its_exponentials(bench):
     sc = SCENARIOS["benchmark-v4.6"]
     assert [f.mode for f in mode_fits(bench, sc, _traj(t, theta, 0 * t, gamma=gamma))] == \
         ["weave"]
+
+
+def test_the_evidence_says_what_was_measured():
+    """The evidence strings with their numbers, from the synthetic signals: the first and last
+    of 15 peaks of e^(s t) |sin(w t)| (s = 0.3, w = 3 pi): d/dt = 0 at t_k + d, d = atan(s/w)/w
+    after t_k = 7/6 and 35/6 s, where the value is e^(s (t_k + d)) cos(atan(s/w)); and a capsize
+    growing by e^(0.15 x 6) = x2.46 over the run."""
+    s_, w = 0.3, 3 * np.pi
+    d, c = np.arctan(s_ / w) / w, np.cos(np.arctan(s_ / w))
+    first, last = (np.exp(s_ * (tk + d)) * c for tk in (7 / 6, 35 / 6))
+    grow = np.exp(s_ * T6) * np.sin(w * T6)
+    o = judge_outcome("s", 4.0, _traj(T6, 0 * T6, grow), "e")
+    assert o.evidence == (f"15 peaks of |dtheta/dt| from 1 s: {first:.3g} -> {last:.3g} rad/s, "
+                          "envelope rate +0.3000 /s; completed at 6.00 s")
+    slow = 1e-3 * np.exp(0.15 * T6)
+    o = judge_outcome("cap", 8.0, _traj(T6, slow, 0.15 * slow), "eng")
+    assert (o.scenario, o.engine) == ("cap", "eng")
+    assert o.evidence == ("from 3 s theta keeps one sign and grows monotonically, rate of "
+                          f"log|theta| +0.1500 /s (x{np.exp(0.9):.2f} over the run), "
+                          f"theta(6.00 s) = +{slow[-1]:.4f} rad; completed")
+    wob = slow * (1 + 0.5 * np.sin(20 * T6))
+    o = judge_outcome("cap", 8.0, _traj(T6, wob, np.gradient(wob, T6)), "eng")
+    assert o.evidence.startswith("from 3 s theta is NOT monotone, ")
+    # a run ending 0.01 s after 3 s has two samples there: too few for a rate
+    t = T6[T6 <= 3.01 + 1e-9]
+    assert np.isnan(capsize_measure(_traj(t, 1e-3 * np.exp(0.15 * t), 0.15e-3 * np.exp(
+        0.15 * t))).rate)
+    t3 = T6[T6 <= 3.02 + 1e-9]                      # three samples: a rate
+    assert capsize_measure(_traj(t3, 1e-3 * np.exp(0.15 * t3), 0.15e-3 * np.exp(0.15 * t3))
+                           ).rate == pytest.approx(0.15, rel=1e-6)
