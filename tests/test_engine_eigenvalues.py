@@ -298,3 +298,83 @@ def test_the_pipeline_prepares_each_stage_it_runs_before_making_its_tasks(monkey
     plan = type(plan)(dc.replace(plan.opts, sections=("eigenvalues",)), (), plan.facts)
     assert pipeline._stage_tasks(plan) == []
     assert calls == [("prepare", "a"), ("tasks", "a")]
+
+
+# -- the judgment's arithmetic and rows on hand-made numbers (issue 24's mutation round) --------
+
+def test_matched_error_pairs_the_eigenvalues_and_scales_per_speed():
+    """Two speeds by hand. At the first the engine's four are the expected ones in another
+    order with one 0.5 off: the best pairing leaves 0.5, over max(1, 10) = 10 -> 0.05. At the
+    second every |expected| is below 1.5, so the scale is 1.5 (not 1, not the first speed's
+    10): 0.3 / 1.5 = 0.2."""
+    expected = [[10.0, 1 + 2j, 1 - 2j, -3.0], [0.5, -0.5, 0.25, -1.5]]
+    got = [[1 - 2j, -3.0, 10.5, 1 + 2j], [0.8, -0.5, 0.25, -1.5]]
+    np.testing.assert_allclose(matched_error(got, expected), [0.05, 0.2], rtol=1e-15)
+
+
+def _judged(difference=None):
+    """A check of 3 speeds whose worst is the middle one (error 0.4 / max(1, 8) = 0.05)."""
+    expected = np.array([[2.0, 1.0, -1.0, -2.0], [8.0, 1.0, -1.0, -2.0],
+                         [3.0, 1.0, -1.0, -2.0]])
+    got = expected + np.array([[1e-3, 0, 0, 0], [0.4, 0, 0, 0], [0, 0, 0, 0]])
+    kwargs = {} if difference is None else {"difference": difference}
+    return judge_eigenvalues("pinocchio", "benchmark", [0.0, 5.0, 10.0], got, expected,
+                             (4.25, None), (4.5, None), (0.0, 10.0), TOL, **kwargs)
+
+
+def test_the_check_names_its_worst_speed_its_modes_and_its_range():
+    c = _judged()
+    assert (c.engine, c.model, c.speeds) == ("pinocchio", "benchmark", (0.0, 5.0, 10.0))
+    assert c.error == pytest.approx(0.05, rel=1e-12) and c.worst_speed == 5.0
+    assert [k.mode for k in c.critical] == ["weave", "capsize"]
+    assert c.speed_range == (0.0, 10.0) and c.difference == ""
+    assert c.passed is False        # 0.05 against [engine_eigenvalues] 1e-9: judged, failed
+    # one scalar speed with its four eigenvalues is a grid of one
+    one = judge_eigenvalues("e", "m", 5.0, [1.0, 2.0, 3.0, 4.0], [1.0, 2.0, 3.0, 4.0],
+                            (None, None), (None, None), (0.0, 1.0), TOL)
+    assert (one.speeds, one.worst_speed, one.error, one.passed) == ((5.0,), 5.0, 0.0, True)
+
+
+def test_the_rows_of_a_judged_check_written_out():
+    """Every field of the three rows, from the hand-made check above: the weave speeds 4.5
+    and 4.25 m/s differ by 0.25 (fails [engine_critical_speeds]); no capsize speed on either
+    side agrees."""
+    from comparisons.judgments.engine_eigenvalues import check_rows
+    eig, weave, capsize = (r.as_dict() for r in check_rows(_judged()))
+    tol_eig = TOL["engine_eigenvalues"].tolerance
+    tol_v = TOL["engine_critical_speeds"].tolerance
+    assert eig == {
+        "quantity": "eigenvalues: roll/steer eigenvalues", "scenario": "upright straight running",
+        "model": "benchmark", "engines": ["reference", "pinocchio"],
+        "max_error": eig["max_error"], "tolerance": tol_eig, "passed": False,
+        "localized_to": "v = 5 m/s",
+        "note": "largest |difference| of the matched eigenvalues / max(1, max |reference|), "
+                "over 3 speeds 0-10 m/s",
+        "speeds": [0.0, 10.0, 3]}
+    assert eig["max_error"] == pytest.approx(0.05, rel=1e-12)
+    assert weave == {
+        "quantity": "eigenvalues: weave speed", "scenario": "upright straight running",
+        "model": "benchmark", "engines": ["reference", "pinocchio"], "max_error": 0.25,
+        "tolerance": tol_v, "passed": False,
+        "localized_to": "reference 4.5000000000 m/s, engine 4.2500000000 m/s",
+        "note": "in 0-10 m/s; none on both counts as agreement",
+        "reference": 4.5, "engine_value": 4.25}
+    assert capsize["quantity"] == "eigenvalues: capsize speed"
+    assert (capsize["max_error"], capsize["passed"]) == (None, True)
+    assert capsize["localized_to"] == "reference none m/s, engine none m/s"
+    assert capsize["scenario"] == "upright straight running" and capsize["model"] == "benchmark"
+
+
+def test_the_rows_of_a_declared_difference_are_reported_and_say_why():
+    from comparisons.judgments.engine_eigenvalues import check_rows
+    rows = [r.as_dict() for r in check_rows(_judged("crown"), quantity="crown study",
+                                            scenario="s")]
+    tail = "; reported, not judged: a declared model difference (crown)"
+    assert [r["passed"] for r in rows] == [None, None, None]
+    assert [r["quantity"] for r in rows] == ["crown study: roll/steer eigenvalues",
+                                             "crown study: weave speed",
+                                             "crown study: capsize speed"]
+    for r in rows:
+        assert r["scenario"] == "s" and r["note"].endswith(tail)
+        assert (r["declared_difference"], r["why"]) == ("crown", "declared model difference")
+    assert rows[1]["note"] == "in 0-10 m/s; none on both counts as agreement" + tail

@@ -209,3 +209,145 @@ def test_model_difference_reports_the_error_ratio():
     got, why = _verdict(h, e, fit_order(h, e)[0])
     assert got == "model difference"
     assert "= 1.04 over 8x" in why and "5.00e-02" in why
+
+
+# -- compare_forward's row, field by field (issue 24's mutation round) --------------------------
+
+def test_an_error_exactly_at_the_tolerance_passes_and_is_not_past_the_threshold():
+    """yc is 0 in the reference motion, so yc off by exactly 1e-6 gives an error of exactly
+    1e-6: [trajectory]'s tolerance is the largest accepted error (tolerances.toml), and the
+    threshold names what goes past it, not what reaches it."""
+    assert TRAJ_TOL == 1e-6
+    ref, other = make_run(), make_run("pinocchio", part_at=0.3, size=1e-6, coord=YC)
+    (c,), te = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert c["max_error"] == 1e-6 and c["passed"] is True
+    assert c["localized_to"] == "none past 1e-6; largest: yc"
+    assert te.first == "-"
+    # the errors themselves: (grid times, 8 coordinates), yc off from 0.3 s on
+    assert te.errors.shape == (101, 8)
+    assert np.all(te.errors[te.t >= 0.3 - 1e-12, YC] == 1e-6)
+    assert np.all(te.errors[te.t < 0.3 - 1e-12] == 0.0)
+
+
+def test_the_rows_note_and_why_say_who_judges_it():
+    ref, other = make_run(), make_run("pinocchio", part_at=0.3, size=1e-3)
+    (same,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS)
+    assert same["note"] == "same integrator and formulation as the reference: judged"
+    assert same["why"] == "" and same["localized_to"] == "first past 1e-6: theta at 0.30 s; largest: theta"
+    (own,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS,
+                                judged_by="trajectory_conformance")
+    assert own["note"] == "its own integrator: judged by [trajectory_conformance]"
+    assert own["tolerance"] == TOLS["trajectory_conformance"].tolerance and own["why"] == ""
+    assert own["passed"] is True       # 1e-3 against 5e-2
+    (rep,), _ = compare_forward(None, ref, other, horizon(1.0), TOLS, judged_by=None)
+    assert rep["note"] == "reported here, judged by its convergence order"
+    assert rep["why"] == "judged by its convergence order"
+
+
+def test_thresholds_are_written_short():
+    from comparisons.judgments.scenario_compare import _short
+    assert (_short(1e-6), _short(2.5e-12), _short(1e6), _short(3e15)) == (
+        "1e-6", "2e-12", "1e+6", "3e+15")
+
+
+# -- the horizon's fields and words, and the study's plumbing (issue 24's mutation round) -------
+
+def test_the_horizons_fields_and_reasons_written_out():
+    """Separation: theta off by 3e-6 from 0.3 s (first past 1e-6 at 0.30 s): the horizon is
+    0.29 s, where the separation is still 0. At the start: two sizes, 3e-6 then 4e-6 from
+    0.01 s, so the start's 3e-6 is the one reported. Never past: the end of the shorter run."""
+    h = meaningful_horizon(make_run(), make_run(part_at=0.3, size=3e-6))
+    assert (h.t, h.separation_at_t, h.threshold) == (pytest.approx(0.29), 0.0, 1e-6)
+    assert h.reason == ("the two runs separate by more than 1e-06 in theta, gamma, xc, yc at "
+                        "t = 0.30 s (3.0e-06); the comparison stops at the grid time before")
+    assert h.describe() == "horizon 0.29 s: " + h.reason
+    # one sample before the parting is 2e-7 apart: that is the horizon's separation
+    twin = make_run(part_at=0.3, size=3e-6)
+    twin.q[make_run().t >= 0.28 - 1e-12, THETA] += 2e-7
+    assert meaningful_horizon(make_run(), twin).separation_at_t == pytest.approx(2e-7)
+    start = make_run(part_at=0.0, size=3e-6)
+    start.q[start.t >= 0.01 - 1e-12, THETA] += 1e-6
+    h = meaningful_horizon(make_run(), start, what="A and B")
+    assert h.separation_at_t == pytest.approx(3e-6)
+    assert h.reason == "A and B already differ by 3.0e-06 > 1e-06 at the start"
+    h = meaningful_horizon(make_run(), make_run(fall=1.234, part_at=0.5, size=4e-7))
+    assert (h.limited_by, h.threshold) == ("end", 1e-6)
+    assert h.reason == ("the two runs stay within 1e-06 (max 4.0e-07) up to the end of the "
+                        "shorter run (1.234 s; the last common grid time 1.23 s)")
+
+
+def test_exactly_at_the_threshold_the_runs_have_not_parted():
+    """yc is 0 in the reference motion: off by exactly 1e-6 it is at, not past, 1e-6."""
+    h = meaningful_horizon(make_run(), make_run(part_at=0.3, size=1e-6, coord=YC))
+    assert h.limited_by == "end" and h.separation_at_t == 1e-6
+
+
+def test_unknown_coordinates_and_grids_without_common_times_are_refused():
+    with pytest.raises(ValueError, match=r"unknown coordinate\(s\) \['roll'\]; choose from"):
+        error_vs_time(make_run(), make_run(), coords=("theta", "roll"))
+    with pytest.raises(ValueError, match="at least 2 samples"):
+        error_vs_time(make_run(t_end=0.0), make_run())
+    with pytest.raises(ValueError, match="share no output-grid time up to the horizon"):
+        error_vs_time(make_run(t0=1.0), make_run(t0=1.0), horizon=0.5)
+    # a sample a millionth of a step off the grid is not on it; a billionth of one is
+    other = make_run()
+    other.t[10] += 1e-6 * DT
+    assert error_vs_time(make_run(), other, coords=("theta",))["t"].size == 200
+    other.t[10] -= 1e-6 * DT - 1e-12 * DT
+    assert error_vs_time(make_run(), other, coords=("theta",))["t"].size == 201
+
+
+def test_the_perturbed_twin_and_the_cut_reference_run(thesis):
+    import dataclasses
+
+    from comparisons.judgments.convergence import (perturbed_scenario, reference_horizon,
+                                                   reference_run)
+    from reference_model.scenarios import SCENARIOS
+    sc = SCENARIOS["stability-psid10"]
+    twin = perturbed_scenario(sc, 1e-6)
+    assert twin.name == "stability-psid10+dtheta1e-06"
+    assert twin.dq_ind0 == (sc.dq_ind0[0] + 1e-6, *sc.dq_ind0[1:]) and twin.grid == sc.grid
+    assert perturbed_scenario(sc).dq_ind0[0] == sc.dq_ind0[0] + 1e-9     # the default
+    inverse = next(s for s in SCENARIOS.values() if s.kind != "forward")
+    with pytest.raises(ValueError, match="is not a forward scenario"):
+        perturbed_scenario(inverse)
+    # the tight reference cut at 0.05 s: the grid's first six samples, DOP853 at 1e-11
+    run = reference_run(thesis, sc, t_end=0.05)
+    assert run.t.tolist() == pytest.approx([0.0, 0.01, 0.02, 0.03, 0.04, 0.05], abs=1e-12)
+    assert (run.settings["rtol"], run.settings["atol"], run.settings["constraints"]) == (
+        1e-11, 1e-12, "projection")
+    assert reference_run(thesis, sc, t_end=0.0599).t.size == 6     # cut at the grid time before
+    with pytest.raises(ValueError, match="fewer than 2 grid samples"):
+        reference_run(thesis, sc, t_end=0.005)
+    # the horizon of a 0.1 s scenario: 1e-9 rad/s apart never part by 1e-6 in 0.1 s; 1e-3
+    # rad/s apart are 1e-5 rad apart at 0.01 s already
+    short = dataclasses.replace(sc, grid=(0.0, 0.01, 11))
+    ref = reference_run(thesis, short)
+    h = reference_horizon(thesis, short, reference=ref)
+    assert (h.limited_by, h.t) == ("end", pytest.approx(0.1))
+    assert h.reason.startswith("two reference runs (rtol 1e-11) 1e-09 rad/s apart in "
+                               "theta_dot(0) stay within 1e-06")
+    h = reference_horizon(thesis, short, delta=1e-3, reference=ref)
+    assert (h.limited_by, h.t) == ("separation", 0.0)
+
+
+def test_the_engines_label_and_the_studys_numbers():
+    from types import SimpleNamespace
+
+    from comparisons.judgments.convergence import ConvergenceStudy, _engine_label
+    lab = lambda s: _engine_label(SimpleNamespace(settings=s))  # noqa: E731  (a run's settings)
+    assert lab({}) == "engine"
+    assert lab({"integrator": "DOP853"}) == "DOP853"
+    assert lab({"engine": "exudyn", "integrator": "x", "build": "tree", "contact": "disc",
+                "solver_type": "GeneralizedAlpha", "spectral_radius": 0.8}) == \
+        "exudyn tree (disc contact), GeneralizedAlpha rho_inf 0.8"
+    assert lab({"engine": "exudyn", "solver_type": "TrapezoidalIndex2"}) == \
+        "exudyn, TrapezoidalIndex2"
+    s = ConvergenceStudy("sc", "eng", "ref", ("theta",), (4e-3, 2e-3, 1e-3), (1.6e-5, 4e-6, 1e-6),
+                         (1.6e-5, 4e-6, 1e-6), ("theta",) * 3, 2.0, 0.0, 2.0, 0.5, "given",
+                         ("completed",) * 3, "converges", "why")
+    assert s.ratios == pytest.approx((4.0, 4.0), rel=1e-12)
+    assert s.difference == 1e-6                     # the error at the smallest step
+    assert s.describe() == ("eng vs ref, sc up to 0.50 s: max error in theta by step "
+                            "{0.004: 1.60e-05, 0.002: 4.00e-06, 0.001: 1.00e-06}, fitted order "
+                            "2.00 -> converges (why)")
