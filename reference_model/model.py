@@ -40,6 +40,13 @@ _STATUS = {1: "the linear system is singular (constraint Jacobian rank-deficient
               "definite): the state is at a kinematic singularity",
            2: "the state or the result is not finite (NaN or inf in the input?)"}
 
+#: the default of `Model._eval`'s dq: the kernel does not read the rates
+_NO_RATES = object()
+#: the public method of each kernel that reads the rates (for the refusal's message)
+_PUBLIC = {"qv": "Qv", "qaero": "Qaero", "dynamics": "generalized_forces",
+           "mass_bias": "inverse_dynamics", "constraint_residual": "constraint_residual",
+           "constraint_bias": "constraint_bias", "energy": "kinetic_energy"}
+
 
 class ModelEvaluationError(ArithmeticError):
     """A state where the model cannot be evaluated (singular system, non-finite numbers)."""
@@ -160,7 +167,14 @@ class Model:
         return Model(params, gyroscopic=self.gyroscopic, backend=self.backend)
 
     # -- generic evaluation ------------------------------------------------------------
-    def _eval(self, name: str, q, dq=None, shape=None):
+    def _eval(self, name: str, q, dq=_NO_RATES, shape=None):
+        """Kernel ``name`` at q (and dq, for the kernels of the rates: a caller of those must
+        give them; ``None`` there is refused, never read as the last call's or as q)."""
+        if dq is None:
+            raise ValueError(f"{_PUBLIC.get(name, name)} needs the rates dq (shape (8,) or "
+                             "(N, 8)); got None")
+        if dq is _NO_RATES:
+            dq = None
         fn = self.library.functions[name]
         shape = shape or (fn.size,)
         if self.backend == "c" and np.ndim(q) == 1 and np.shape(q)[0] == N_Q and (dq is None or np.shape(dq) == (N_Q,)):

@@ -410,3 +410,26 @@ def test_general_bicycle_equals_oracle(request, which):
     ddq_ref, _ = o.forward_acceleration(p, q, dq, (1.0, 2.0, -3.0), contact)
     _close(model.forward_acceleration(q, dq, torques=(1.0, 2.0, -3.0)), ddq_ref,
            1e-9 * max(1.0, np.abs(ddq_ref).max()), "ddq")
+
+
+@pytest.mark.parametrize("method", ["Qv", "Qaero", "generalized_forces", "constraint_residual",
+                                    "constraint_bias", "kinetic_energy"])
+def test_a_term_of_the_rates_refuses_dq_none_instead_of_reading_old_rates(method):
+    """dq = None used to be read as whatever rates the previous single-state call left in the
+    kernel's input buffer (or as q itself for a batch): plausible, wrong numbers. Now it is
+    refused in one line naming the method and what it needs, for one state and a batch."""
+    from reference_model import load_model
+    m = load_model("thesis-disc")
+    q = np.array([0.1, 0.2, 0.3, 0.05, 0.4, 0.02, 0.1, 0.2])
+    getattr(m, method)(q, np.full(8, 3.0))          # leaves rates in the buffer
+    for arg in (q, np.stack([q, q])):
+        with pytest.raises(ValueError, match=rf"^{method} needs the rates dq \(shape \(8,\) or "
+                                             r"\(N, 8\)\); got None$"):
+            getattr(m, method)(arg, None)
+
+
+def test_inverse_dynamics_refuses_dq_none():
+    from reference_model import load_model
+    m = load_model("thesis-disc")
+    with pytest.raises(ValueError, match="^inverse_dynamics needs the rates dq"):
+        m.inverse_dynamics(np.zeros(8), None, np.zeros(8))
