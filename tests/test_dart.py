@@ -246,27 +246,13 @@ def test_the_run_urdf_frees_the_rear_contact_height():
     z joint at the origin, unlimited in practice, hangs from yc_link; the rest the export's.
     The export has one XML declaration, which the run's text drops."""
     import xml.etree.ElementTree as ET
+
     from engines.dart.skeleton import run_urdf
+    from run_urdf_checks import assert_rear_height_freed
     p = load_model("thesis-disc").params
     export_text = urdf_text(p)
     assert export_text.count("?>") == 1
     text = run_urdf(p)
     assert isinstance(text, str) and "?>" not in text
     robot, export = ET.fromstring(text), ET.fromstring(export_text.split("?>", 1)[1])
-    joints = {j.get("name"): j for j in robot.iter("joint")}
-    assert joints["phi"].find("parent").get("link") == "zc_link"
-    zc = joints["zc"]
-    assert zc.get("type") == "prismatic"
-    assert (zc.find("parent").get("link"), zc.find("child").get("link")) == ("yc_link", "zc_link")
-    assert zc.find("axis").get("xyz").split() == ["0", "0", "1"]
-    origin = zc.find("origin")
-    assert origin.get("xyz").split() == ["0", "0", "0"] == origin.get("rpy").split()
-    limit = zc.find("limit")
-    assert float(limit.get("lower")) <= -1e9 and float(limit.get("upper")) >= 1e9
-    links = [ln.get("name") for ln in robot.iter("link")]
-    assert links == [ln.get("name") for ln in export.iter("link")] + ["zc_link"]
-    assert robot.find("link[@name='zc_link']").find("inertial") is None
-    shape = lambda e: (e.tag, e.attrib, [shape(c) for c in e])
-    for j in export.iter("joint"):
-        if j.get("name") != "phi":
-            assert shape(joints[j.get("name")]) == shape(j)
+    assert_rear_height_freed(robot, export)
