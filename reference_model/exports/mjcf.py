@@ -1,11 +1,11 @@
-"""The bicycle as MJCF (MuJoCo's model format): the thesis's tree, wheel discs and a ground plane.
+"""The bicycle as MJCF (an XML format for multibody models): the thesis's tree, wheel discs and a ground plane.
 
     from reference_model.exports.mjcf import MjcfSettings, mjcf_text   # or reference_model.export_mjcf
     text = mjcf_text(params)                                   # the default contact settings
     text = mjcf_text(params, MjcfSettings(timestep=5e-5, solref=(1e-3, 1.0)))
 
 The tree is the URDF's (`reference_model.exports.description`), one joint per coordinate in the thesis's
-order, so MuJoCo's qpos/qvel order *is* the thesis's q order (depth-first body order: the rear
+order, so an MJCF simulator's position/velocity order *is* the thesis's q order (depth-first body order: the rear
 wheel's joint psi comes before the frame's beta because rear_wheel is the lean frame's first
 child)::
 
@@ -19,8 +19,8 @@ upright) and every joint axis is a unit vector along a body axis with positive s
 joint angles carry the thesis's signs unchanged. The four massive bodies carry ``<inertial>``
 with the mass, the CoM in body axes and the full tensor about the CoM (``fullinertia``, so
 the products I3xz, I4xz go in as the tensor entry [0, 2] = [2, 0] with no sign change;
-MuJoCo diagonalises it itself). ``inertiafromgeom="false"``: the wheel geoms add no mass.
-The massless links carry a placeholder inertial (`PLACEHOLDER_MASS`: MuJoCo refuses a moving
+the MJCF compiler diagonalises it itself). ``inertiafromgeom="false"``: the wheel geoms add no mass.
+The massless links carry a placeholder inertial (`PLACEHOLDER_MASS`: the MJCF compiler refuses a moving
 body without mass), which an engine zeroes after compiling.
 No armature, damping, stiffness, friction loss or joint limits anywhere.
 
@@ -30,7 +30,7 @@ Contact: each wheel is a cylinder of the wheel's radius with a thin half-width
 (contype/conaffinity). The contact parameters (friction cone, condim, solref, solimp, friction
 coefficient, noslip iterations, time step, integrator) come from `MjcfSettings` and are
 written on the ``<option>`` and on a default class shared by the three geoms, so the file alone
-reproduces a run. MuJoCo's contact is soft and frictional: a rolling cylinder on a plane
+reproduces a run. MJCF's contact is soft and frictional: a rolling cylinder on a plane
 approximates the ideal rolling of the disc-contact model (``contact = "disc"``), never exactly,
 and never the thesis's fork-axis front contact. The aerodynamic drag and the rider torques are
 loads, not part of the file (an engine applies them; the file says so).
@@ -55,11 +55,11 @@ CONES = ("elliptic", "pyramidal")
 CONDIMS = (3, 4, 6)           # 1 is frictionless: a wheel would slide sideways freely
 SOLVERS = ("Newton", "CG", "PGS")
 #: The massless links of the chain (xc_link, yc_link, yaw, lean) carry this mass (kg) and these
-#: principal moments (kg m^2): MuJoCo's compiler refuses a moving body whose mass or any
+#: principal moments (kg m^2): the MJCF compiler refuses a moving body whose mass or any
 #: principal moment is below mjMINVAL = 1e-15. At 1e-14 they change M by at most ~1e-14 *
 #: (1 + 10 m)^2 ~ 1e-12 kg m^2 absolute at the states the harness uses (|xc|, |yc| <= 10 m)
 #: against entries of O(1-100): ~1e-14 relative; an engine can set them to zero after
-#: compiling (the MuJoCo engine does, so its M is the thesis's to round-off).
+#: compiling (so its M is the thesis's to round-off).
 PLACEHOLDER_MASS = 1e-14
 PLACEHOLDER_INERTIA = 1e-14
 
@@ -74,26 +74,26 @@ def _positive(name: str, value, fix: str) -> float:
 
 @dataclass(frozen=True)
 class MjcfSettings:
-    """What MuJoCo needs beyond the bicycle's parameters: the contact and the time stepping.
+    """What an MJCF simulator needs beyond the bicycle's parameters: the contact and the time stepping.
 
     Defaults: the settings closest to ideal rolling at a 1e-4 s step, found by the contact
-    study of `bicycle-xval run` (comparisons/stages/soft_contact.py; MuJoCo's share in
-    engines/mujoco/contact_study.py): the slip and the
+    study of `bicycle-xval run` (comparisons/stages/soft_contact.py, with the share the engine
+    declares): the slip and the
     trajectory error shrink in proportion to the solref time constant (not with the step
     alone; solimp, impratio, cone, condim, noslip iterations change neither the slip),
-    MuJoCo honours time constants down to two steps, so tc = 2 h; the implicit
+    the simulator honours time constants down to two steps, so tc = 2 h; the implicit
     integrator halves the error of implicitfast on stability-psid10 at 0.4 s (1.4e-4
     against 2.6e-4 rad or m) and equals it elsewhere:
 
-    * ``timestep`` (s): MuJoCo's fixed step; ``integrator`` one of `INTEGRATORS`.
-    * ``solref`` = (time constant s, damping ratio): the contact's spring-damper in MuJoCo's
+    * ``timestep`` (s): the fixed step; ``integrator`` one of `INTEGRATORS`.
+    * ``solref`` = (time constant s, damping ratio): the contact's spring-damper in MJCF's
       standard form; the time constant must be at least 2 timesteps to be honoured.
     * ``solimp`` = (dmin, dmax, width m, midpoint, power): the impedance curve.
     * ``friction`` (-): the sliding friction coefficient (torsional and rolling friction are
       zero: the ideal rolling disc resists neither spin about the normal nor rolling).
     * ``cone``: 'elliptic' (the Coulomb cone itself) or 'pyramidal'; ``condim`` 3 (sliding
       friction only), 4 or 6.
-    * ``noslip_iterations``: MuJoCo's post-solver that removes residual slip (0 = off).
+    * ``noslip_iterations``: MJCF's post-solver that removes residual slip (0 = off).
     * ``solver``, ``iterations``, ``tolerance``: the constraint solver.
     * ``wheel_half_width`` (m): half the cylinder's length. The model's wheel is a knife edge:
       a leaned cylinder rests on its lower cap's rim, ``wheel_half_width`` beside the disc's
@@ -238,7 +238,7 @@ def mjcf_text(p: Parameters, settings: MjcfSettings | None = None, *,
 
     ``rear_height=False`` (the export): exactly the thesis's eight joints. ``True`` inserts a
     slide joint ``zc`` (vertical, after ``yc``): the rear contact point's height, which the
-    thesis's chain holds at zero by construction. A forward run with MuJoCo's contact needs it:
+    thesis's chain holds at zero by construction. A forward run on MJCF's soft contact needs it:
     without it the rear wheel cannot press into the ground, so its contact has no normal force
     of its own and its friction cone is empty; with it the ground carries the rear wheel
     through the contact, as it does the front one. The joint order is then xc, yc, zc, phi...
