@@ -42,6 +42,7 @@ import re
 import shutil
 import subprocess
 import sys
+import time
 import tomllib
 from pathlib import Path
 
@@ -186,7 +187,6 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
             progress=print) -> Result:
     """Mutate ``module`` alone in a scratch copy and run its selection; the result is written
     to ``out/results/<slug>.json`` and returned."""
-    import time
     if module not in module_set():
         raise SystemExit(f"error: {module} is not in [tool.mutmut]'s set (see --list); give a "
                          "path relative to the repository, e.g. comparisons/judgments/rows.py")
@@ -307,8 +307,12 @@ def survivors(module: str, out: Path = ROOT / "build" / "mutation") -> str:
     return "\n".join(lines) + ("\n" if lines else "")
 
 
+def _result_path(module: str, out: Path) -> Path:
+    return out / "results" / f"{slug(module)}.json"
+
+
 def _save(res: Result, out: Path) -> Path:
-    path = out / "results" / f"{slug(res.module)}.json"
+    path = _result_path(res.module, out)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(dataclasses.asdict(res), indent=1) + "\n")
@@ -321,7 +325,7 @@ def _pct(a: int, b: int) -> str:
 
 
 def load_result(module: str, out: Path = ROOT / "build" / "mutation") -> Result | None:
-    path = out / "results" / f"{slug(module)}.json"
+    path = _result_path(module, out)
     if not path.is_file():
         return None
     d = json.loads(path.read_text())
