@@ -150,6 +150,7 @@ def _fixed_step_options(args, fixed) -> dict:
 
 
 def cmd_run(args) -> int:
+    from ..report.figure_cache import FigureCache
     from ..report.writer import write_report
     from ..stages.pipeline import SelectionError, run_comparison, select
     from ..stages.pool import MAX_WORKERS
@@ -186,8 +187,10 @@ def cmd_run(args) -> int:
     result = run_comparison(opts, _progress)   # opts.tolerances goes to every stage's args
     _progress("writing the report ...")
     try:
+        # --redraw: nothing read back, every figure drawn and stored afresh
+        cache = FigureCache.default(read=not args.redraw)
         path = write_report(result, args.out, data=not args.no_data, html=not args.no_html,
-                            progress=_progress, force=args.force)
+                            progress=_progress, force=args.force, figure_cache=cache)
     except OutFolderError as exc:                  # the folder changed during the runs
         raise UsageError(str(exc)) from None
     passed = result.summary["passed"]
@@ -316,6 +319,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--figures", choices=FIGURE_POLICIES, default=None,
                    help="which figures to draw: all, those of the sections where something "
                         "failed, or none [failing with --quick, else all]")
+    s.add_argument("--redraw", action="store_true",
+                   help="draw every figure anew instead of reading back the ones whose drawing "
+                        "code and data are unchanged since an earlier run (kept in "
+                        "~/.cache/bicycle-xval/figures, or $BICYCLE_XVAL_CACHE/figures)")
     s.add_argument("--jobs", type=int, default=None,
                    help="worker processes [the machine's cores, never more than the stages]")
     s.add_argument("--stage-timeout", type=float, default=None, metavar="SECONDS",

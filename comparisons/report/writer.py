@@ -19,6 +19,7 @@ import numpy as np
 
 from ..judgments.rows import Comparison
 from . import figures, frames, markdown
+from .figure_cache import FigureCache, drawing_key
 from .matrix import claims_matrix, term_matrix
 from ..stages.files import ReportFolder, write_bytes, write_csv, write_text
 from .html import write_html
@@ -44,27 +45,63 @@ def with_matrices(summary: dict) -> dict:
             "term_matrix": term_matrix(summary["comparisons"], summary["engines"]).as_dict()}
 
 
-def draw_figures(result, workers: int | None = None) -> dict[str, bytes]:
-    """Every figure of ``result`` as PNG bytes, drawn in worker processes (matplotlib draws on
-    one core; the figures are independent)."""
+def draw_figures(result, workers: int | None = None, cache: FigureCache | None = None,
+                 progress: Callable[[str], None] = lambda s: None) -> tuple[dict[str, bytes], int]:
+    """Every figure of ``result`` as PNG bytes, and how many were drawn: those ``cache`` holds
+    (`figure_cache`: same drawing code, same data) are read back, the others drawn in worker
+    processes (matplotlib draws on one core; the figures are independent) and stored."""
     from ..stages.pool import Task, run_tasks
     figs = [f for sec in result.sections for f in sec.figures]
-    tasks = [Task(f.name, figures.draw_png, (f.kind, f.data), 1.0, f"figure {f.name}") for f in figs]
-    done = run_tasks(tasks, workers, warm=("matplotlib.pyplot",))
+    pngs: dict[str, bytes] = {}
+    keys: dict[str, str] = {}
+    if cache is not None:
+        try:
+            drawing = drawing_key()
+            for f in figs:
+                key = cache.key(drawing, f.kind, f.data)
+                if key is not None:
+                    keys[f.name] = key
+                    png = cache.get(key)
+                    if png is not None:
+                        pngs[f.name] = png
+        except OSError as exc:
+            progress(f"  the figure cache {cache.root} cannot be read ({exc}): every figure is "
+                     "drawn")
+            cache, keys, pngs = None, {}, {}
+    todo = [f for f in figs if f.name not in pngs]
+    tasks = [Task(f.name, figures.draw_png, (f.kind, f.data), 1.0, f"figure {f.name}") for f in todo]
+    done = run_tasks(tasks, workers, warm=("matplotlib.pyplot",)) if tasks else {}
     failed = [f"{k}: {r.error}" for k, r in done.items() if r.error]
     if failed:
         raise RuntimeError(f"drawing a figure failed: {failed[0]}")
-    return {f.name: done[f.name].value for f in figs}
+    for f in todo:
+        pngs[f.name] = done[f.name].value
+        if cache is not None and f.name in keys:
+            try:
+                cache.put(keys[f.name], pngs[f.name])
+            except OSError as exc:
+                progress(f"  the figure cache {cache.root} cannot be written ({exc}): figures "
+                         "are drawn every run")
+                cache = None
+    if cache is not None and todo:
+        cache.prune()
+    return {f.name: pngs[f.name] for f in figs}, len(todo)
 
 
 def write_report(result, out: Path, data: bool = True, html: bool = True,
-                 progress: Callable[[str], None] = lambda s: None, force: bool = False) -> Path:
+                 progress: Callable[[str], None] = lambda s: None, force: bool = False,
+                 figure_cache: FigureCache | None = None) -> Path:
     """Write the report of ``result`` into ``out`` (a folder); returns the path of report.md.
     A non-empty ``out`` without an earlier report is refused unless ``force``
-    (`files.ReportFolder`)."""
-    pngs = draw_figures(result, result.options.workers)
+    (`files.ReportFolder`). ``figure_cache``: where drawn figures are kept between runs (None:
+    every figure is drawn, nothing stored)."""
+    pngs, drawn = draw_figures(result, result.options.workers, figure_cache, progress)
     policy = result.summary.get("figures", "all")
-    progress(f"  {len(pngs)} figure(s) drawn" + ("" if policy == "all" else f" (--figures {policy})"))
+    kept = len(pngs) - drawn
+    progress(f"  {len(pngs)} figure(s): {drawn} drawn"
+             + (f", {kept} unchanged since an earlier run (figure cache {figure_cache.root})"
+                if kept else "")
+             + ("" if policy == "all" else f" (--figures {policy})"))
     with ReportFolder(out, force) as folder:
         root = folder.path
         for name, png in pngs.items():
