@@ -216,7 +216,8 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
             status[name] = what.strip()
     count = lambda s: sum(1 for v in status.values() if v == s)
     survivors = sorted(n for n, v in status.items() if v == "survived")
-    rerun_killed = confirm(module, survivors, tests, scratch, venv_bin, progress) if rerun else ()
+    rerun_killed = (confirm(module, survivors, tests, scratch, venv_bin, progress, children)
+                    if rerun else ())
     survivors = [n for n in survivors if n not in rerun_killed]
     diffs = _diffs(venv_bin, scratch, survivors)
     version = subprocess.run([str(venv_bin / "mutmut"), "--version"], capture_output=True,
@@ -250,36 +251,66 @@ def _diffs(venv_bin: Path, scratch: Path, names) -> dict[str, list[str]]:
 
 
 def confirm(module: str, names, tests: list[str], scratch: Path, venv_bin: Path,
-            progress=print) -> tuple[str, ...]:
+            progress=print, workers: int = 1) -> tuple[str, ...]:
     """The survivors among ``names`` that the whole selection ``tests`` kills.
 
     mutmut runs each mutant only against the tests that executed its function in its first
     run, and a function that ran while a module- or session-scoped fixture was built is
     recorded for the first test that built it only: a mutant of an engine's constructor is
     then run against one test, while every test using the fixture would see it. Here each
-    survivor is applied to the scratch copy's source (``mutmut apply``) and the whole
-    selection run on it (pytest, stopping at the first failure), the source restored after."""
+    survivor is applied to the scratch copy's source (``mutmut apply``), the mutated module
+    read, the source restored, and the whole selection run (pytest, stopping at the first
+    failure) on a copy of the scratch tree holding that module: ``workers`` copies, one
+    pytest each at a time."""
+    import concurrent.futures
+    import queue
+    import threading
     source = scratch / module
     original = source.read_bytes()
-    killed = []
     args = [str(venv_bin / "python"), "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
             "-m", "not slow and not bicycles", *tests]
-    try:
-        for i, name in enumerate(names, 1):
+    workers = max(1, min(workers, len(names) or 1))
+    trees = queue.Queue()
+    for k in range(workers):
+        tree = scratch.parent / f"{scratch.name}.rerun{k}"
+        if tree.exists():
+            shutil.rmtree(tree)
+        shutil.copytree(scratch, tree, symlinks=True,
+                        ignore=shutil.ignore_patterns(*COPY_IGNORE))
+        trees.put(tree)
+    apply_lock = threading.Lock()
+    done, killed = [0], []
+
+    def one(name: str) -> bool:
+        with apply_lock:        # mutmut apply writes the scratch copy's source: one at a time
             applied = _mutmut(venv_bin, scratch, "apply", name)
-            if applied.returncode != 0 or source.read_bytes() == original:
-                source.write_bytes(original)
-                continue
-            run = subprocess.run(args, cwd=scratch, stdout=subprocess.DEVNULL,
-                                 stderr=subprocess.DEVNULL, timeout=1800, check=False)
+            mutated = source.read_bytes()
             source.write_bytes(original)
-            if run.returncode not in (0, 5):        # 1: a test failed; 2-4: it broke collection
-                killed.append(name)
-            if i % 10 == 0 or i == len(names):
-                progress(f"  {module}: rerun {i}/{len(names)} survivors on the whole selection, "
-                         f"{len(killed)} killed")
+        if applied.returncode != 0 or mutated == original:
+            return False
+        tree = trees.get()
+        try:
+            (tree / module).write_bytes(mutated)
+            run = subprocess.run(args, cwd=tree, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.DEVNULL, timeout=1800, check=False)
+        finally:
+            (tree / module).write_bytes(original)
+            trees.put(tree)
+        return run.returncode not in (0, 5)     # 1: a test failed; 2-4: it broke collection
+
+    try:
+        with concurrent.futures.ThreadPoolExecutor(workers) as pool:
+            for name, dead in zip(names, pool.map(one, names)):
+                done[0] += 1
+                if dead:
+                    killed.append(name)
+                if done[0] % 10 == 0 or done[0] == len(names):
+                    progress(f"  {module}: rerun {done[0]}/{len(names)} survivors on the whole "
+                             f"selection, {len(killed)} killed")
     finally:
         source.write_bytes(original)
+        while not trees.empty():
+            shutil.rmtree(trees.get(), ignore_errors=True)
     return tuple(killed)
 
 
