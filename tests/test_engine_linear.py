@@ -62,6 +62,14 @@ def test_a_weave_crossing_exactly_on_the_last_grid_point():
     assert weave == 3.0
 
 
+def test_a_zero_at_the_range_end_does_not_stand_for_a_crossing_at_its_start():
+    """(0.3 - v)(3 - v): + to - at 0.3 m/s, and exactly 0 again at 3.0, the range's end: the
+    weave speed is 0.3 (refined), not the first interval's end (planted: re[i - 1] == 0)."""
+    weave, _ = critical_speeds(_synthetic(lambda v: (0.3 - v) * (3.0 - v), lambda v: v - 6.2),
+                               (0.0, 3.0))
+    assert weave == pytest.approx(0.3, abs=1e-10)
+
+
 def test_a_pair_already_stable_at_the_range_start_has_no_weave_there():
     """The pair's real part is 0 at the first speed and negative after: it does not cross from
     + to - within the range, so there is no weave speed (planted: re >= 0 as the start)."""
@@ -147,8 +155,26 @@ def test_a_newton_that_never_converges_is_named():
     eng = load_engine("pinocchio", load_model("benchmark"))
     with pytest.raises(LinearizationError, match=r"engine 'never': Newton on the front contact's "
                                                  r"height .* did not converge in 50 iterations "
-                                                 r"\(last residual 1\.0e\+00 m\)"):
+                                                 r"\(last residual 1\.0e\+00 m\); check the "
+                                                 r"model's geometry$"):
         upright_configurations(Never(eng))
+
+
+def test_a_model_with_drag_has_no_upright_steady_motion():
+    import dataclasses
+    m = load_model("benchmark")
+    dragged = m.with_params(dataclasses.replace(m.params, cv=0.1))
+    eng = load_engine("pinocchio", m)
+
+    class Dragged(_Counting):
+        def __init__(self, eng):
+            super().__init__(eng)
+            self.model = dragged
+
+    with pytest.raises(LinearizationError, match=r"cv = 0.1 kg/m: with drag, upright straight "
+                                                 r"running is not a steady motion; fix: "
+                                                 r"linearize a copy with cv = 0$"):
+        upright_configurations(Dragged(eng))
 
 
 def test_a_solved_upright_is_reused_at_its_step_only(bench):
