@@ -39,14 +39,14 @@ class _Offset:
     """An 'engine' whose run is ``ref`` plus ``error`` in theta (and ``error/2`` in psi, not a
     compared coordinate, unless ``psi`` says otherwise)."""
 
-    def __init__(self, ref, error, settings=None, psi=None):
-        self.ref, self.error, self.psi = ref, error, psi
+    def __init__(self, ref, error, settings=None, psi=None, coord=THETA, whole=False):
+        self.ref, self.error, self.psi, self.coord, self.whole = ref, error, psi, coord, whole
         self.settings = {"engine": "fake"} if settings is None else settings
 
     def simulate(self, scenario, t_end=None):
-        k = self.ref.t <= t_end + 1e-12
+        k = self.ref.t <= (np.inf if self.whole else t_end) + 1e-12
         q = self.ref.q[k].copy()
-        q[:, THETA] += self.error
+        q[:, self.coord] += self.error
         q[:, PSI] += self.error / 2 if self.psi is None else self.psi
         return dataclasses.replace(self.ref, t=self.ref.t[k], q=q, dq=self.ref.dq[k],
                                    t_end=float(self.ref.t[k][-1]), settings=self.settings)
@@ -96,12 +96,14 @@ def test_a_horizon_just_short_of_a_grid_time_leaves_it_out():
 def test_two_samples_make_a_grid_one_does_not():
     two = _traj([0.0, 0.01])
     assert error_vs_time(two, two)["t"].size == 2
-    with pytest.raises(ValueError, match="at least 2 samples"):
+    with pytest.raises(ValueError, match="^the reference trajectory needs at least 2 samples to "
+                                         "define its grid$"):
         error_vs_time(_traj([0.0]), two)
 
 
 def test_runs_that_share_no_grid_time_are_refused():
-    with pytest.raises(ValueError, match="share no output-grid time"):
+    with pytest.raises(ValueError, match="^the two trajectories share no output-grid time up to "
+                                         "the horizon$"):
         error_vs_time(_traj([0.0, 0.01, 0.02]), _traj([0.005, 0.015]))
     with pytest.raises(ValueError, match="share no output-grid time"):
         error_vs_time(_traj([1.0, 1.01]), _traj([1.0, 1.01]), horizon=0.5)
@@ -355,3 +357,123 @@ def test_a_study_without_a_reference_runs_one_to_its_horizon():
                           horizon=0.05, reference_rtol=1e-9)
     assert "rtol 1e-09, projection" in s.reference
     assert max(s.errors) < 1e-12 and s.horizon == pytest.approx(0.05)
+
+
+def _exact(errors, steps, **kw):
+    """A study whose runs are given, each offset in theta by exactly ``errors[i]`` from a zero
+    reference: the errors are those floats exactly (|e - 0|)."""
+    t = 0.01 * np.arange(51)
+    ref = _traj(t, settings={"integrator": "exact", "rtol": 1e-13, "constraints": "none"})
+    runs = []
+    for e in errors:
+        q = np.zeros((t.size, 8))
+        q[:, THETA] = e
+        runs.append(_traj(t, q, settings={"engine": "given"}))
+    return convergence_study(load_model("thesis-disc"), None, SCENARIOS["stability-psid10"],
+                             steps=steps, horizon=0.5, reference=ref, runs=runs, **kw)
+
+
+STEPS = (4e-3, 2e-3, 1e-3, 5e-4)
+
+
+def test_an_error_exactly_at_the_convergence_bound_is_not_below_it():
+    """Order 2 with 1e-3 exactly at the smallest step: 'converges' needs the error below 1e-3,
+    so this is inconclusive; 1e-8 exactly (the reference's floor) is not below the floor, so
+    that one converges. Planted: <= for < on either bound."""
+    s = _exact((1.6e-2, 4e-3, 1e-3, 2.5e-4), STEPS)
+    assert s.verdict == "converges"
+    at = _exact((6.4e-2, 1.6e-2, 4e-3, 1e-3), STEPS)
+    assert at.verdict == "inconclusive" and "still 1.0e-03 >= 1e-03" in at.verdict_reason
+    floor = _exact((6.4e-7, 1.6e-7, 4e-8, 1e-8), STEPS)
+    assert floor.verdict == "converges", floor.verdict_reason
+
+
+def test_the_ratio_reads_the_largest_step_wherever_it_is_listed():
+    """Steps listed smallest first: error(h_max) is the last error, not the first. Planted:
+    argmax of nothing (index 0)."""
+    steps = tuple(reversed(STEPS))
+    s = _exact((0.0505, 0.051, 0.052, 0.054), steps)
+    assert s.verdict == "model difference"
+    assert f"= {0.054 / 0.0505:.3g} over 8x in h" in s.verdict_reason
+    assert s.verdict_reason.endswith("not the integrator's error")
+
+
+def test_the_worst_coordinate_is_the_one_with_the_largest_error():
+    s = _study(lambda h: 40.0 * h ** 2, STEPS, psi=0.0)
+    assert s.worst == ("theta",) * 4
+    t = 0.01 * np.arange(101)
+    ref = _traj(t, settings={"integrator": "exact", "rtol": 1e-13, "constraints": "none"})
+    g = convergence_study(load_model("thesis-disc"),
+                          lambda h: _Offset(ref, 40.0 * h ** 2, psi=0.0, coord=GAMMA),
+                          SCENARIOS["stability-psid10"], steps=STEPS, horizon=0.5, reference=ref)
+    assert g.worst == ("gamma",) * 4
+
+
+def test_the_engine_is_named_after_its_first_run():
+    """Settings that name the step: the study's engine is the first step's."""
+    t = 0.01 * np.arange(101)
+    ref = _traj(t, settings={"integrator": "exact", "rtol": 1e-13, "constraints": "none"})
+    s = convergence_study(load_model("thesis-disc"),
+                          lambda h: _Offset(ref, 40.0 * h ** 2, settings={"engine": f"h{h:g}"}),
+                          SCENARIOS["stability-psid10"], steps=STEPS, horizon=0.5, reference=ref)
+    assert s.engine == "h0.004"
+
+
+def test_a_run_past_the_horizon_is_judged_up_to_the_horizon_only():
+    """An engine that ignores t_end and runs the whole second: the study still compares up to
+    its 0.3 s horizon (planted: the horizon not passed when finding the common end or the
+    rows)."""
+    t = 0.01 * np.arange(101)
+    ref = _traj(t, settings={"integrator": "exact", "rtol": 1e-13, "constraints": "none"})
+    q = np.zeros((101, 8))
+    q[t > 0.3 + 1e-9, THETA] = 1.0                  # a large error after the horizon only
+
+    class Late(_Offset):
+        def simulate(self, scenario, t_end=None):
+            run = super().simulate(scenario, t_end)
+            return dataclasses.replace(run, q=run.q + q)
+
+    s = convergence_study(load_model("thesis-disc"),
+                          lambda h: Late(ref, 40.0 * h ** 2, whole=True),
+                          SCENARIOS["stability-psid10"], steps=STEPS, horizon=0.3, reference=ref)
+    assert s.horizon == pytest.approx(0.3) and s.horizon_reason == "given"
+    np.testing.assert_allclose(s.errors, [40.0 * h ** 2 for h in STEPS], rtol=1e-12)
+
+
+def test_a_reference_without_settings_is_labelled_with_question_marks():
+    t = 0.01 * np.arange(101)
+    s = convergence_study(load_model("thesis-disc"), lambda h: _Offset(_traj(t), 40.0 * h ** 2),
+                          SCENARIOS["stability-psid10"], steps=STEPS, horizon=0.5,
+                          reference=_traj(t))
+    assert s.reference == "reference thesis-disc (disc contact), ? rtol nan, ?"
+
+
+SHORT = dataclasses.replace(SCENARIOS["stability-psid10"], grid=(0.0, 0.01, 31))   # 0.3 s
+
+
+def test_without_a_horizon_the_study_finds_the_reference_s_own():
+    """No horizon, no reference: the study runs the reference at the rtol asked for, then its
+    twin, and compares up to where they part or end (0.3 s here: the twins stay within 1e-6);
+    the engine's errors are those planted on the same reference. Planted: the reference, its
+    rtol, the model or the scenario not passed on; the horizon not read."""
+    disc = load_model("thesis-disc")
+    ref = reference_run(disc, SHORT, rtol=1e-10)
+    s = convergence_study(disc, lambda h: _Offset(ref, 40.0 * h ** 2, psi=0.0), SHORT,
+                          steps=STEPS, reference_rtol=1e-10)
+    assert s.horizon == pytest.approx(0.3)
+    assert s.horizon_reason.startswith("two reference runs (rtol 1e-10) 1e-09 rad/s apart")
+    assert "rtol 1e-10, projection" in s.reference
+    np.testing.assert_allclose(s.errors, [40.0 * h ** 2 for h in STEPS], rtol=1e-9)
+    assert s.verdict == "converges"
+
+
+def test_the_reference_horizon_runs_both_twins_at_the_asked_tolerance():
+    """With no reference given: twins 0 rad/s apart at the same rtol are the same run (they
+    never part, even at a 1e-13 threshold); 1e-9 rad/s apart they part above 1e-13 at once.
+    Planted: the reference or its twin at the default rtol (they then differ by the tolerance),
+    the threshold not passed on."""
+    disc = load_model("thesis-disc")
+    same = reference_horizon(disc, SHORT, delta=0.0, threshold=1e-13, rtol=1e-9)
+    assert same.limited_by == "end" and same.separation_at_t == 0.0
+    apart = reference_horizon(disc, SHORT, delta=1e-9, threshold=1e-13, rtol=1e-9)
+    assert apart.limited_by == "separation" and apart.t < 0.3
