@@ -158,6 +158,28 @@ class FigureCache:
         from ..stages.files import write_bytes
         write_bytes(self._path(key), png)
 
+    def read_back(self, figs) -> tuple[dict[str, bytes], dict[str, str]]:
+        """For figures (`Figure`: name, kind, data): the PNGs held, by name, and the key of every
+        figure that can be keyed. Raises OSError only if the cache cannot be read at all."""
+        drawing = drawing_key()
+        held, keys = {}, {}
+        for f in figs:
+            key = self.key(drawing, f.kind, f.data)
+            if key is not None:
+                keys[f.name] = key
+                png = self.get(key)
+                if png is not None:
+                    held[f.name] = png
+        return held, keys
+
+    def store(self, keys: dict[str, str], pngs: dict[str, bytes]) -> None:
+        """Keep each PNG of ``pngs`` (by name) under its key in ``keys`` (the names without a
+        key are not kept), then prune. Raises OSError at the first file that cannot be written."""
+        for name, png in pngs.items():
+            if name in keys:
+                self.put(keys[name], png)
+        self.prune()
+
     def prune(self) -> int:
         """Remove the least recently used files beyond ``max_files``; returns how many."""
         try:

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..judgments.rows import Comparison
 from . import figures, frames, markdown
-from .figure_cache import FigureCache, drawing_key
+from .figure_cache import FigureCache
 from .matrix import claims_matrix, term_matrix
 from ..stages.files import ReportFolder, write_bytes, write_csv, write_text
 from .html import write_html
@@ -52,39 +52,29 @@ def draw_figures(result, workers: int | None = None, cache: FigureCache | None =
     processes (matplotlib draws on one core; the figures are independent) and stored."""
     from ..stages.pool import Task, run_tasks
     figs = [f for sec in result.sections for f in sec.figures]
-    pngs: dict[str, bytes] = {}
+    held: dict[str, bytes] = {}
     keys: dict[str, str] = {}
     if cache is not None:
         try:
-            drawing = drawing_key()
-            for f in figs:
-                key = cache.key(drawing, f.kind, f.data)
-                if key is not None:
-                    keys[f.name] = key
-                    png = cache.get(key)
-                    if png is not None:
-                        pngs[f.name] = png
+            held, keys = cache.read_back(figs)
         except OSError as exc:
             progress(f"  the figure cache {cache.root} cannot be read ({exc}): every figure is "
                      "drawn")
-            cache, keys, pngs = None, {}, {}
-    todo = [f for f in figs if f.name not in pngs]
+            cache = None
+    todo = [f for f in figs if f.name not in held]
     tasks = [Task(f.name, figures.draw_png, (f.kind, f.data), 1.0, f"figure {f.name}") for f in todo]
     done = run_tasks(tasks, workers, warm=("matplotlib.pyplot",)) if tasks else {}
     failed = [f"{k}: {r.error}" for k, r in done.items() if r.error]
     if failed:
         raise RuntimeError(f"drawing a figure failed: {failed[0]}")
-    for f in todo:
-        pngs[f.name] = done[f.name].value
-        if cache is not None and f.name in keys:
-            try:
-                cache.put(keys[f.name], pngs[f.name])
-            except OSError as exc:
-                progress(f"  the figure cache {cache.root} cannot be written ({exc}): figures "
-                         "are drawn every run")
-                cache = None
-    if cache is not None and todo:
-        cache.prune()
+    drawn = {f.name: done[f.name].value for f in todo}
+    if cache is not None and drawn:
+        try:
+            cache.store(keys, drawn)
+        except OSError as exc:
+            progress(f"  the figure cache {cache.root} cannot be written ({exc}): figures are "
+                     "drawn every run")
+    pngs = {**held, **drawn}
     return {f.name: pngs[f.name] for f in figs}, len(todo)
 
 
