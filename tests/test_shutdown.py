@@ -87,6 +87,19 @@ def _wait_for(check, what: str, seconds: float = 60.0):
     raise AssertionError(f"{what} never happened")
 
 
+def _forked_children(pid: int) -> list[psutil.Process]:
+    """The children of ``pid`` forked from it (its command line): its pools' workers."""
+    main = psutil.Process(pid)
+    found = []
+    for c in main.children():
+        try:
+            if c.cmdline() == main.cmdline():
+                found.append(c)
+        except psutil.Error:          # gone, or a zombie, since the listing
+            pass
+    return found
+
+
 def _left(procs: list[psutil.Process], deadline: float) -> list[int]:
     """The processes still alive (zombies count as gone) at ``deadline``."""
     def alive(p):
@@ -171,14 +184,17 @@ def test_signal_during_the_runs_ends_the_run_and_its_workers(tmp_path, case):
 @pytest.mark.parametrize("case", [(signal.SIGTERM, False), (signal.SIGINT, True)], ids=_ids)
 def test_signal_during_figure_drawing_ends_the_run_and_its_workers(tmp_path, case):
     """The figure pool's workers, frozen mid-drawing, end with the run, which exits cleanly
-    (it exited 1 with a RuntimeError traceback)."""
+    (it exited 1 with a RuntimeError traceback). ``--redraw``: with the figure cache warm
+    (any earlier run of the same figure) nothing is drawn and no pool starts."""
     sig, group = case
     out = _old_report(tmp_path)
     proc = _start(tmp_path, "run", "--quick", "--scenarios", "check", "--sections", "none",
-                  "--engines", "reference", "--figures", "all", "--out", str(out))   # 1 figure
+                  "--engines", "reference", "--figures", "all", "--redraw",
+                  "--out", str(out))   # 1 figure
     _wait_for(lambda: "writing the report" in _stderr(tmp_path), "the report's writing")
-    # the stage workers are reaped before that line: the children now are the figure pool's
-    workers = _wait_for(lambda: psutil.Process(proc.pid).children(), "the figure pool")
+    # the stage workers are reaped before that line: the forked children now are the figure
+    # pool's (forked: the same command line as the run; not the `git` asked for the provenance)
+    workers = _wait_for(lambda: _forked_children(proc.pid), "the figure pool")
     for w in workers:
         w.suspend()
     _stop_and_check(proc, out, sig, group)
