@@ -57,12 +57,20 @@ class Slow(ReferenceEngine):
 '''
 
 
+def _sigint_at_its_default() -> None:
+    """In the child before the exec: SIGINT as a terminal's foreground job has it. A shell
+    starts background jobs (``make test-slow &``, a CI runner's) with SIGINT ignored, which
+    the exec keeps and the CLI rightly leaves as it is, as ``nohup`` means it."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(tmp_path: Path, *args) -> subprocess.Popen:
     """The CLI in a session of its own; its stderr goes to ``tmp_path / "stderr"`` (read with
     `_stderr` at any time, never blocking)."""
     with open(tmp_path / "stderr", "wb") as err:
         return subprocess.Popen([sys.executable, "-m", "comparisons.cli", *args], cwd=ROOT,
-                                stdout=subprocess.DEVNULL, stderr=err, start_new_session=True)
+                                stdout=subprocess.DEVNULL, stderr=err, start_new_session=True,
+                                preexec_fn=_sigint_at_its_default)
 
 
 def _stderr(tmp_path: Path) -> str:

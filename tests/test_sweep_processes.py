@@ -79,8 +79,11 @@ def test_ctrl_c_during_a_sweep_is_one_line_and_keeps_the_finished_chunks(tmp_pat
     argv = ["sweep", "--vary", "m3=80:90:2", "--checks", "terms", "--states", "1", "--engines",
             f"{hostile}:Sleeper", "--workers", "1", "--no-progress", "--out", str(out)]
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
+    # SIGINT at its default, as a terminal's foreground job has it (a shell's background job,
+    # such as a CI runner's, starts with it ignored, which the sweep leaves as it is)
     proc = subprocess.Popen([sys.executable, "-c", SCRIPT, *argv], cwd=ROOT, env=env,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 60
         while not list(out.glob("chunks/*/chunk-000000.parquet")):

@@ -65,10 +65,15 @@ def deferred_signals(program: str = "bicycle-xval") -> Iterator[StopRequest]:
             again(signum, frame)
         stop.signum = signum
 
-    previous = {s: signal.signal(s, note) for s in SIGNALS}
+    # a signal the process was started ignoring (a background job's SIGINT) stays ignored,
+    # as `run` leaves it (signals.install_handlers)
+    previous = {s: signal.getsignal(s) for s in SIGNALS}
+    noted = [s for s in SIGNALS if previous[s] is not signal.SIG_IGN]
+    for s in noted:
+        signal.signal(s, note)
     try:
         yield stop
     finally:
-        for s in SIGNALS:
+        for s in noted:
             signal.signal(s, again if stop.signum is not None else
                           previous[s] if previous[s] is not None else signal.SIG_DFL)
