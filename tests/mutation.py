@@ -32,6 +32,7 @@ mutmut counts it.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import datetime
 import fnmatch
@@ -46,7 +47,7 @@ import time
 import tomllib
 from pathlib import Path
 
-__all__ = ["Result", "equivalents", "main", "measure", "module_set", "selection_for", "survivors",
+__all__ = ["Result", "confirm", "equivalents", "exclusive", "main", "measure", "module_set", "selection_for", "survivors",
            "has_functions", "table", "text_only"]
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -175,6 +176,34 @@ def _narrowed(text: str, module: str, tests: list[str], children_timeout: float 
         cfg["timeout_multiplier"] = children_timeout
     body = "".join(f"{k} = {json.dumps(v)}\n" for k, v in cfg.items())   # JSON's lists are TOML's
     return "".join(lines[:start]) + "[tool.mutmut]\n" + body + "\n" + "".join(lines[end:])
+
+
+@contextlib.contextmanager
+def exclusive(out: Path):
+    """One measuring run per ``out`` at a time: two share the scratch copies
+    (``out/<module>``) and spoil each other's figures (seen once: one module's run not
+    reportable). An advisory lock on ``out/.lock``, released when the process ends however it
+    ends; a second run stops at once with a one-line error."""
+    import fcntl
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / ".lock", "a+") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            fh.seek(0)
+            holder = fh.read().strip() or "?"
+            raise SystemExit(f"error: another measuring run (pid {holder}) holds {out / '.lock'}; "
+                             "wait for it to end, or give another --out") from None
+        fh.seek(0)
+        fh.truncate()
+        fh.write(f"{os.getpid()}\n")
+        fh.flush()
+        try:
+            yield
+        finally:
+            fh.seek(0)
+            fh.truncate()
+            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _mutmut(venv_bin: Path, scratch: Path, *args: str, log=None) -> subprocess.CompletedProcess:
@@ -451,9 +480,11 @@ def main(argv=None) -> int:
                  and ((r := load_result(m, a.out)) is None or not current(r))]
     if not todo and not a.table:
         ap.error("name a module, or give --all, --table or --list")
-    for i, m in enumerate(dict.fromkeys(todo), 1):
-        print(f"[{i}/{len(todo)}]", end=" ", flush=True)
-        measure(m, children=a.children, out=a.out, rerun=not a.no_rerun)
+    if todo:
+        with exclusive(a.out):
+            for i, m in enumerate(dict.fromkeys(todo), 1):
+                print(f"[{i}/{len(todo)}]", end=" ", flush=True)
+                measure(m, children=a.children, out=a.out, rerun=not a.no_rerun)
     if a.table or todo:
         print(table(a.out), end="")
     return 0

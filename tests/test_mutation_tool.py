@@ -106,3 +106,67 @@ def test_a_module_without_functions_has_nothing_to_mutate(tmp_path):
     (tmp_path / "code.py").write_text("class C:\n    def f(self):\n        return 1\n")
     assert not mutation.has_functions("shim.py", tmp_path)
     assert mutation.has_functions("code.py", tmp_path)
+
+
+# -- the rerun of mutmut's survivors, and the lock ------------------------------------------
+
+def _fake_venv(tmp_path: Path, mutants: dict[str, str | None]) -> Path:
+    """A bin/ with the interpreter running these tests as ``python`` and a ``mutmut`` whose
+    ``apply NAME`` writes ``mutants[NAME]`` over ``mod.py`` (None: apply fails, as for a name
+    mutmut does not know)."""
+    import json
+    import stat
+    import sys
+    bin_ = tmp_path / "bin"
+    bin_.mkdir()
+    (bin_ / "python").write_text(f'#!/bin/sh\nexec "{sys.executable}" "$@"\n')
+    (bin_ / "mutants.json").write_text(json.dumps(mutants))
+    (bin_ / "mutmut").write_text(
+        f"#!{sys.executable}\nimport json, pathlib, sys\n"
+        f"m = json.loads(pathlib.Path({str(bin_ / 'mutants.json')!r}).read_text())\n"
+        "if sys.argv[1] != 'apply' or m.get(sys.argv[2]) is None:\n    sys.exit(1)\n"
+        "pathlib.Path('mod.py').write_text(m[sys.argv[2]])\n")
+    for f in ("python", "mutmut"):
+        (bin_ / f).chmod((bin_ / f).stat().st_mode | stat.S_IXUSR)
+    return bin_
+
+
+def test_confirm_counts_a_survivor_killed_only_by_the_whole_selection(tmp_path):
+    """Of three survivors, the one the selection's test catches is returned; an equivalent
+    one and one that cannot be applied are not; the scratch source is restored and the
+    rerun copies are removed. Planted: confirm returning every survivor its pytest ran (the
+    exit status read the wrong way round) returns the equivalent one too."""
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    original = "def add(a, b):\n    return a + b\n"
+    (scratch / "mod.py").write_text(original)
+    (scratch / "test_mod.py").write_text("from mod import add\n\n\n"
+                                         "def test_add():\n    assert add(2, 3) == 5\n")
+    names = ["mod.x_add__mutmut_1", "mod.x_add__mutmut_2", "mod.x_add__mutmut_3"]
+    bin_ = _fake_venv(tmp_path, {names[0]: "def add(a, b):\n    return a - b\n",
+                                 names[1]: "def add(a, b):\n    return b + a\n",
+                                 names[2]: None})
+    seen = []
+    killed = mutation.confirm("mod.py", names, ["test_mod.py"], scratch, bin_,
+                              progress=seen.append, workers=2)
+    assert killed == (names[0],)
+    assert (scratch / "mod.py").read_text() == original
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "scratch"]
+    assert seen and seen[-1].endswith("rerun 3/3 survivors on the whole selection, 1 killed")
+
+
+def test_a_second_measuring_run_on_the_same_out_stops_at_once(tmp_path):
+    """Two runs sharing build/mutation's scratch copies spoiled a module's figures once: the
+    second now stops with one line naming the holder, and the lock is free once the first
+    ends. (flock locks belong to the open file: a second open in one process conflicts as a
+    second process would.)"""
+    import os
+    import pytest
+    with mutation.exclusive(tmp_path):
+        assert (tmp_path / ".lock").read_text() == f"{os.getpid()}\n"
+        with pytest.raises(SystemExit, match=rf"^error: another measuring run \(pid "
+                                             rf"{os.getpid()}\) holds .*; wait for it"):
+            with mutation.exclusive(tmp_path):
+                pass
+    with mutation.exclusive(tmp_path):     # free again
+        pass
