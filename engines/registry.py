@@ -267,8 +267,8 @@ def _import_file(path_text: str, engine: str, spec: str):
 
 
 def _who(label: str, spec: str) -> str:
-    """'engine 'x'' or 'engine 'x' (spec)' when the spec says more than the label."""
-    return f"engine {label!r}" if label == spec else f"engine {label!r} ({spec})"
+    """"engine 'x' (spec)": every caller's spec holds a colon its label cannot."""
+    return f"engine {label!r} ({spec})"
 
 
 def _safe(text: str) -> str:
