@@ -461,3 +461,208 @@ def test_inverse_kinematics_starts_on_the_constraint_at_the_first_time(model):
     heights = np.array([model.constraint_residual(q, np.zeros(8))[0] for q in m.q])
     assert np.max(np.abs(heights)) < 1e-10
     np.testing.assert_array_equal(m.q[:, IND], _leaning_and_steering(t)[0])
+
+
+# -- round two: what the first measurement of these tests left (issue 24) ----------------------
+
+def test_integer_and_row_inputs_are_states_like_any_other(model):
+    """A user's q0 written as integers, or as a (1, 8) row and a (8, 1) column: the same
+    solution as the float vector. Planted: Newton on an integer array (each step truncated,
+    so it never converges), the reshape to (8,) left out."""
+    q_int = [0, 0, 0, 1, 0, 0, 1, 0]          # leaned and steered 1 rad: beta is 0.098 rad
+    q_ref, its = solve_beta(model, np.array(q_int, dtype=float))
+    q, its_int = solve_beta(model, q_int)
+    assert q.dtype == np.float64 and its_int == its and q[BETA] == q_ref[BETA] > 0.09
+    ref = consistent_state(model, np.array(q_int, dtype=float), np.ones(8))
+    row = consistent_state(model, [q_int], np.ones((8, 1), dtype=int))
+    np.testing.assert_array_equal(row.q, ref.q)
+    np.testing.assert_array_equal(row.dq, ref.dq)
+    q0, dq0, T = _rolling_state(model)
+    t = np.linspace(0.0, 0.2, 3)
+    flat = simulate(model, q0, dq0, t, T)
+    shaped = simulate(model, q0.reshape(1, 8), dq0.reshape(8, 1), t, T)
+    np.testing.assert_array_equal(shaped.q, flat.q)
+
+
+def test_the_states_in_messages_are_rounded_to_six_digits():
+    """Planted: the rounding's digits (none: integers; seven)."""
+    q = np.full(8, 0.1234567)
+    with pytest.raises(ConstraintSolveError, match=r"at q = \[0\.123457, 0\.123457, "):
+        solve_beta(Scalar(lambda b: 1.0, lambda b: 0.0), q)
+    D = np.zeros((N_C, N_Q))
+    with pytest.raises(ConstraintSolveError, match=r"at q = \[0\.123457, 0\.123457, "):
+        dependent_rates(Linear(D), q, [1.0, 0.0, 0.0])
+
+
+def test_describe_reports_the_worst_velocity_residual_of_rows_two_to_five():
+    """On a state built by hand: the largest |C| among the four velocity rows, before and
+    after. Planted: the after's rows from the third on (the second row's 5e-3 missed)."""
+    from reference_model.solvers import ConsistentState
+    q = np.zeros(8)
+    s = ConsistentState(q, q, q, q, 3, np.array([1e-3, 0.0, 2e-2, 0.0, -4e-2]),
+                        np.array([0.0, 5e-3, 0.0, 0.0, 0.0]))
+    assert s.describe() == ("beta corrected by +0.000000e+00 rad in 3 Newton iteration(s); "
+                            "front contact height +1.000e-03 m -> +0.0e+00 m; max |velocity "
+                            "constraint| 4.000e-02 -> 5.0e-03 m/s")
+
+
+def test_the_documented_defaults(model):
+    """docs/model.md: forward runs at rtol 1e-10, atol 1e-12, Baumgarte 10, 10, the fall
+    limit 1.4 rad; Newton gives up after 50 iterations (51 evaluations). Planted: each
+    default changed."""
+    q0, dq0, T = _rolling_state(model)
+    traj = simulate(model, q0, dq0, [0.0, 0.1], T)
+    assert traj.settings == {"integrator": "DOP853", "rtol": 1e-10, "atol": 1e-12,
+                             "constraints": "baumgarte", "baumgarte": [10.0, 10.0],
+                             "fall_limit": 1.4}
+    assert traj.message == "reached the end of the grid" and traj.status == "completed"
+    m = Scalar(lambda b: b * b + 1.0, lambda b: 2.0 * b)
+    q = np.zeros(8)
+    q[BETA] = 0.7
+    with pytest.raises(ConstraintSolveError, match="did not converge in 50 iterations"):
+        solve_beta(m, q)
+    assert m.calls == 51
+
+
+@pytest.mark.parametrize("baumgarte", [(5.0, 3.0), (0.2, 0.5)])
+def test_the_step_bound_follows_both_baumgarte_constants(model, baumgarte):
+    """3 / (2 a1 + a2^2): (5, 3) -> 3/19 s, (0.2, 0.5) -> 3/0.65 s (a rate below 1 still
+    bounds the step). At the straight-rolling equilibrium the error estimate vanishes, so the
+    steps grow to the bound. Planted: 3 a1, 2 a2, the bound only for rates above 1."""
+    a1, a2 = baumgarte
+    bound = 3.0 / (2 * a1 + a2 ** 2)
+    q0, dq0, T = _rolling_state(model)
+    ends = []
+    traj = simulate(model, q0, dq0, np.linspace(0.0, 12 * bound, 13), T, baumgarte=baumgarte,
+                    progress=ends.append)
+    assert traj.status == "completed"
+    steps = np.diff([0.0, *ends])
+    assert bound * (1 - 1e-9) < steps.max() <= bound * (1 + 1e-12)
+
+
+def test_the_shortest_grid_is_two_samples_and_no_time_repeats(model):
+    """Planted: three samples required, a repeated time let through."""
+    q0, dq0, T = _rolling_state(model)
+    assert simulate(model, q0, dq0, [0.0, 0.05], T).t.tolist() == [0.0, 0.05]
+    with pytest.raises(ValueError, match="strictly increasing"):
+        simulate(model, q0, dq0, [0.0, 0.05, 0.05], T)
+
+
+class Blowup(Spy):
+    """xc'' = 1 / (1 - xc)^3 from rest: xc reaches 1 with an infinite speed at t = 1 exactly
+    (energy: xc'^2 = 1/(1 - xc)^2 - 1, and the integral of u / sqrt(1 - u^2) over (0, 1) is
+    1), so the integrator's steps shrink to nothing there."""
+
+    def forward(self, q, dq, *args, **kwargs):
+        res = self._model.forward(q, dq, *args, **kwargs)
+        if np.ndim(q) != 1:
+            return res
+        ddq = np.zeros(N_Q)
+        ddq[XC] = (1.0 - q[XC]) ** -3 if q[XC] < 1.0 else 1e300
+        return ForwardResult(ddq, res.lam, res.status)
+
+
+def test_an_integrator_failure_ends_the_run_where_it_happened(model):
+    """The blow-up at t = 1: the run stops there as 'failed', with the integrator's own
+    reason, and keeps every sample before it. Planted: the failure's branch not taken (the
+    status string), its message lost, return for break (no trajectory at all)."""
+    t = np.linspace(0.0, 5.0, 11)
+    traj = simulate(Blowup(model), np.zeros(8), np.zeros(8), t, constraints="none")
+    assert traj.status == "failed"
+    found = re.fullmatch(r"integrator failed at t = (1\.0000\d\d) s: Required step size is "
+                         r"less than spacing between numbers\.", traj.message)
+    assert found, traj.message
+    assert traj.t.tolist() == [0.0, 0.5, 1.0][:traj.t.size] and traj.t.size >= 2
+    assert traj.t[-1] <= float(found.group(1))
+
+
+def test_an_unknown_status_of_the_model_is_a_question_mark(model):
+    class Odd(Spy):
+        def forward(self, q, dq, *args, **kwargs):
+            res = self._model.forward(q, dq, *args, **kwargs)
+            return ForwardResult(res.ddq, res.lam, np.full_like(res.status, 7))
+    q0, dq0, T = _rolling_state(model)
+    traj = simulate(Odd(model), q0, dq0, [0.0, 0.5, 1.0], T)
+    assert (traj.status, traj.message) == ("failed", "right-hand side failed at t = 0.000000 s: ?")
+    assert traj.t_end == 0.0
+
+
+def test_a_projection_that_cannot_be_made_fails_the_run_with_its_reason(model):
+    """A model whose front contact never meets the ground at any pitch (height 1 m, slope
+    0): the first projection fails, and the run says why. Planted: the message lost."""
+    class Floating(Spy):
+        def constraint_residual(self, q, dq):
+            return self._model.constraint_residual(q, dq) + np.eye(N_C)[0]
+
+        def constraint_jacobian(self, q):
+            D = self._model.constraint_jacobian(q).copy()
+            D[0, BETA] = 0.0
+            return D
+    q0, dq0, T = _rolling_state(model)
+    traj = simulate(Floating(model), q0, dq0, [0.0, 0.5], T, constraints="projection")
+    assert traj.status == "failed" and traj.t.size == 0 and traj.t_end == 0.0
+    assert traj.message.startswith("constraint projection failed: d[rD]_z/dbeta = 0.00e+00 at ")
+
+
+def test_a_singular_first_output_sample_names_the_grid_start(model):
+    """Planted: the grid's second time named, t_arr[-1] read from an empty cut."""
+    q0, dq0, T = _rolling_state(model)
+    traj = simulate(Spy(model, status_from=0), q0, dq0, [0.5, 0.75, 1.0], T)
+    assert (traj.status, traj.message) == ("failed", "singular system at t = 0.500000 s")
+    assert traj.t.size == 0 and traj.t_end == 0.5
+
+
+def test_a_fall_before_the_first_grid_time_keeps_the_start_and_the_fall(model):
+    """A grid [0, 10] s and a fall at 0.57 s: the start and the fall itself, nothing else;
+    the fall located to brentq's xtol 1e-14 s (theta moves at 2 rad/s there: 2e-14 rad, and
+    the interpolant's rounding; measured 1e-15). Planted: the second sample's time compared
+    (an index error with a single sample). (brentq at its default xtol, 2e-12 s, still
+    converges to 1e-15 here: its last secant steps overshoot the tolerance.)"""
+    q = np.zeros(8)
+    q[THETA] = 0.4
+    s = consistent_state(model, q, np.zeros(8))
+    traj = simulate(model, s.q, s.dq, [0.0, 10.0], fall_limit=0.9)
+    assert traj.status == "fell" and traj.t.size == 2 and traj.t[0] == 0.0
+    assert 0.5 < traj.t[1] < 0.7
+    assert abs(traj.q[-1, THETA] - 0.9) < 1e-13
+
+
+def test_the_output_accelerations_are_those_of_the_run_s_own_constraint_handling(model):
+    """With Baumgarte the ddq column is the stabilised one (the constants enter where C is not
+    zero): from a start off the velocity constraints, it is the model's forward with (10, 10),
+    not the exact one. Planted: the output's accelerations without the constants."""
+    q0, dq0, T = _rolling_state(model)
+    dq0 = dq0.copy()
+    dq0[YC] = 0.05                       # sideways slip of the rear contact: C[2] != 0
+    traj = simulate(model, q0, dq0, [0.0, 0.01], T)
+    stab = model.forward(traj.q, traj.dq, traj.T, THESIS_BAUMGARTE).ddq
+    exact = model.forward(traj.q, traj.dq, traj.T, (0.0, 0.0)).ddq
+    np.testing.assert_array_equal(traj.ddq, stab)
+    assert np.max(np.abs(stab[0] - exact[0])) > 0.1
+
+
+def test_wall_time_is_a_duration(model):
+    """Planted: perf_counter() + t0 (a clock reading, not a duration)."""
+    import time
+    q0, dq0, T = _rolling_state(model)
+    t0 = time.perf_counter()
+    traj = simulate(model, q0, dq0, [0.0, 0.1], T)
+    m = inverse_kinematics(model, ROLLING, [0.0, 0.1])
+    took = time.perf_counter() - t0
+    assert 0 <= traj.timing["wall_seconds"] <= took and 0 <= m.info["wall_seconds"] <= took
+
+
+def test_an_inverse_kinematics_integration_that_fails_says_so(model):
+    """Prescribed rates that blow up at t = 1 (dpsi = 1 / (1 - t)^2): the integration of the
+    dependent coordinates cannot pass it (at loose tolerances, so the steps shrink to nothing
+    in a few hundred; at 1e-12 that takes a minute and a half). Planted: the message lost."""
+    def blowing(t):
+        t = np.asarray(t, dtype=float)
+        z = np.zeros_like(t)
+        rate = 1.0 / (1.0 - np.minimum(t, 1.0 - 1e-300)) ** 2
+        return (np.stack([z, z, z], -1), np.stack([z, rate, z], -1), np.stack([z, z, z], -1))
+    with pytest.raises(ConstraintSolveError, match=r"^inverse kinematics integration failed: "
+                                                   r"Required step size is less than spacing "
+                                                   r"between numbers\.$"):
+        inverse_kinematics(model, IndependentMotion(blowing), np.linspace(0.0, 2.0, 5),
+                           rtol=1e-6, atol=1e-6)
