@@ -34,6 +34,19 @@ class {cls}(Engine):
 '''
 
 
+@pytest.fixture(autouse=True)
+def _modules_forgotten():
+    """The modules these tests import from their temporary folders are forgotten after each
+    (a second session in the same process, as mutmut runs, would find the first one's)."""
+    import importlib
+    before = set(sys.modules)
+    yield
+    for name in set(sys.modules) - before:
+        if "_xyz" in name or name.startswith("bicycle_xval_engine_file_"):
+            del sys.modules[name]
+    importlib.invalidate_caches()
+
+
 def _write(path: Path, text: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(textwrap.dedent(text))
@@ -175,8 +188,6 @@ def test_a_module_that_fails_to_import_names_the_engine_the_spec_and_the_cause(t
     with pytest.raises(EngineLoadError) as e:
         resolve("pkg_reg_xyz.eng:Eng")
     assert str(e.value) == f"engine 'eng' (pkg_reg_xyz.eng:Eng) failed to import: {cause}"
-    sys.modules.pop("pkg_reg_xyz.eng", None)
-    sys.modules.pop("pkg_reg_xyz", None)
 
 
 # -- what an engine declares it needs ----------------------------------------------------------
