@@ -347,3 +347,22 @@ def test_the_pyproject_is_read_as_utf8_whatever_the_locale(tmp_path):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                           cwd=Path(__file__).resolve().parents[1], timeout=60)
     assert (done.returncode, done.stdout) == (0, "['mine']\n"), done.stderr[-500:]
+
+
+def test_a_module_spec_three_deep_is_labelled_by_its_last_part():
+    """reference_model.scenarios.files:Nope is engine 'files'. Planted: split at the first
+    dot ('scenarios.files'). (Any split count from 1 on gives the same last part.)"""
+    import reference_model.scenarios.files as files
+    with pytest.raises(EngineSpecError) as e:
+        resolve("reference_model.scenarios.files:Nope")
+    assert str(e.value).startswith(f"engine 'files': no class 'Nope' in {files.__file__} ")
+
+
+def test_a_registered_engine_with_a_malformed_declaration_names_itself(tmp_path, monkeypatch):
+    """Planted: the registered name or its target dropped on the way to the check."""
+    _registered(tmp_path, monkeypatch, "declared", "declared_xyz:Eng",
+                module="REQUIRES = 'numpy'\n" + ENGINE.format(cls="Eng", name="declared"))
+    with pytest.raises(EngineLoadError) as e:
+        resolve("declared")
+    assert str(e.value) == ("engine 'declared' (declared_xyz:Eng): REQUIRES must be a tuple of "
+                            "module names and EXTRA an extra's name; got 'numpy', None")
