@@ -666,3 +666,13 @@ def test_an_inverse_kinematics_integration_that_fails_says_so(model):
                                                    r"between numbers\.$"):
         inverse_kinematics(model, IndependentMotion(blowing), np.linspace(0.0, 2.0, 5),
                            rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize("where", ["q0", "dq0"])
+def test_a_non_finite_start_of_a_run_is_refused_in_words(model, where):
+    """Planted: the message's wording (the contract docs/model.md quotes)."""
+    q, dq = np.zeros(8), np.zeros(8)
+    (q if where == "q0" else dq)[THETA] = np.nan
+    with pytest.raises(ValueError, match=r"^initial state must be finite \(no NaN or inf in q0, "
+                                         r"dq0\)$"):
+        simulate(model, q, dq, [0.0, 1.0])
