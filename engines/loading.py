@@ -233,7 +233,9 @@ def parse_engine_options(spec: str, pairs: Sequence[str]) -> dict[str, Any]:
 
 def _info(cls: type[Engine], name: str, spec: str, source: str) -> EngineInfo:
     names, anything = _option_names(cls)
-    doc = (inspect.getdoc(cls) or "").strip().splitlines()
+    # the class's own docstring: inspect.getdoc would give an engine without one the base
+    # class's ("Base class: subclasses set name, ...") as its summary
+    doc = inspect.cleandoc(cls.__doc__ or "").strip().splitlines()
     return EngineInfo(name=name, spec=spec, source=source,
                       capabilities=tuple(c for c in CAPABILITIES if c in set(cls.capabilities)),
                       contacts=tuple(getattr(cls, "contacts", ())),
