@@ -1,0 +1,82 @@
+"""The coordinate-swap causes' edges (comparisons/judgments/causes.py), issue 24: how many
+pairs are tried, which effects count, what the swapped states carry, and the 'every term'
+cause. Made-up terms with effects set by hand, so the expected causes are counted here, not
+read from the code. Planted bugs each test was seen failing on are named in it."""
+
+from itertools import combinations
+
+import numpy as np
+import pytest
+
+from comparisons.judgments.causes import coordinate_swap_causes
+from comparisons.judgments.terms import random_states
+from reference_model import COORDINATES
+
+STATES = random_states(3, seed=5)
+
+
+def test_every_pair_is_tried_once():
+    """A term that sees every coordinate with its own weight: each of the 28 pairs of the 8
+    coordinates is a cause once, named a,b in coordinate order. Planted: j from 0 (each pair
+    twice, once the other way round), j from i - 1."""
+    w = np.arange(1.0, 9.0)
+
+    def terms(model, s):
+        return {"T": s.q @ w}
+    causes = coordinate_swap_causes(terms, None, STATES, terms(None, STATES), ["T"])
+    expected = [f"swap:T:{a},{b}" for a, b in combinations(COORDINATES, 2)]
+    assert [c.id for c in causes] == expected
+
+
+def test_the_swapped_states_keep_the_accelerations_and_torques():
+    """A term of q, ddq and T (as the inverse dynamics is): swapping two coordinates moves
+    the q part only. Planted: the swapped states built without ddq or T."""
+    def terms(model, s):
+        return {"ID": s.q[:, 0] + 10 * s.ddq[:, 0] + 100 * s.T[:, 0]}
+    ref = terms(None, STATES)
+    (c,) = [c for c in coordinate_swap_causes(terms, None, STATES, ref, ["ID"])
+            if c.id == "swap:ID:xc,yc"]
+    np.testing.assert_allclose(c.effects[("ID", None)], STATES.q[:, 1] - STATES.q[:, 0],
+                               rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("scale, size, counted", [
+    (0.0, 1e-12, False),        # exactly at the bound 1e-12 max(1, |ref|): not an effect
+    (0.0, 1.5e-12, True),       # just above it (the bound is 1e-12 for |ref| <= 1)
+    (1e3, 5e-10, False),        # |ref| = 1e3: the bound is 1e-9
+    (1e3, 2e-9, True),
+])
+def test_an_effect_counts_only_above_round_off_of_the_term(scale, size, counted):
+    """The term T = scale + size q_xc-dependence set so that swapping xc and yc changes it by
+    exactly ``size`` at one state. Planted: >= for > (the bound itself counted), the bound
+    divided by |ref| instead of multiplied, max(2, |ref|)."""
+    base = np.zeros((3, 8))
+    q = base.copy()
+    q[0, 0] = 1.0                                  # xc = 1, yc = 0 at the first state only
+
+    class S:
+        def __init__(self, q, dq, ddq, T):
+            self.q, self.dq, self.ddq, self.T = q, dq, ddq, T
+    states = S(q, base, base, np.zeros((3, 3)))
+
+    def terms(model, s):
+        return {"T": np.full(3, scale) + np.where(s.q[:, 1] == 1.0, size, 0.0)}
+    ref = terms(None, states)
+    ids = [c.id for c in coordinate_swap_causes(terms, None, states, ref, ["T"])]
+    assert ("swap:T:xc,yc" in ids) is counted, ids
+
+
+def test_a_term_without_the_pair_does_not_stop_the_others():
+    """Terms A (blind to every swap) then B: B's causes are still found, and the 'every term'
+    cause of a pair two terms see holds both effects as they are, taken whole (fixed).
+    Planted: break for continue, the effect stored as None, the cause not fixed."""
+    def terms(model, s):
+        return {"A": np.zeros(3), "B": s.q[:, 0] - s.q[:, 2], "C": 3 * s.q[:, 0]}
+    ref = terms(None, STATES)
+    causes = {c.id: c for c in coordinate_swap_causes(terms, None, STATES, ref, ["A", "B", "C"])}
+    assert "swap:B:xc,phi" in causes and not any(i.startswith("swap:A:") for i in causes)
+    every = causes["swap:all:xc,phi"]
+    assert every.fixed is True and every.kind == "structural"
+    for t in ("B", "C"):
+        np.testing.assert_array_equal(every.effects[(t, None)],
+                                      causes[f"swap:{t}:xc,phi"].effects[(t, None)])
