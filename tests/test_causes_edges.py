@@ -80,3 +80,28 @@ def test_a_term_without_the_pair_does_not_stop_the_others():
     for t in ("B", "C"):
         np.testing.assert_array_equal(every.effects[(t, None)],
                                       causes[f"swap:{t}:xc,phi"].effects[(t, None)])
+
+
+def test_each_parameter_reaching_several_terms_is_a_cause_per_term_whatever_comes_before():
+    """Every parameter but the last reaches one term (or is missing): only the last gives
+    causes, one per term it reaches, each evaluating its own term alone at a changed value.
+    Planted: break for either continue (the parameters after the first skipped one lost).
+    (The evaluator is given its term twice, as the list and as 'only': dropping either
+    leaves the same evaluation.)"""
+    from comparisons.judgments.causes import parameter_term_causes
+    from comparisons.judgments.term_checks import model_terms
+    from reference_model import load_model
+    from reference_model.params import PARAMETER_NAMES
+    thesis = load_model("thesis")
+    states = random_states(2, seed=3)
+    one, zero = {"M": np.ones((2, 8, 8))}, np.zeros((2, 8, 8))
+    effects = {n: dict(one) for n in PARAMETER_NAMES[1:-1]}       # the first one missing
+    last = PARAMETER_NAMES[-1]
+    effects[last] = {"M": np.ones((2, 8, 8)), "Qgrav": np.ones((2, 8)), "D": zero[:, :5]}
+    units = {n: "u" for n in PARAMETER_NAMES}
+    causes = parameter_term_causes(effects, thesis, units, lambda n: None, states, model_terms)
+    assert [c.id for c in causes] == [f"{last}@M", f"{last}@Qgrav"]
+    value = float(getattr(thesis.params, last))
+    moved = causes[0].evaluate(0.1 * abs(value) + 0.01)
+    assert set(moved) == {("M", None)}
+    assert causes[0].value == value and causes[0].unit == "u"
