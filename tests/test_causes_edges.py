@@ -105,3 +105,54 @@ def test_each_parameter_reaching_several_terms_is_a_cause_per_term_whatever_come
     moved = causes[0].evaluate(0.1 * abs(value) + 0.01)
     assert set(moved) == {("M", None)}
     assert causes[0].value == value and causes[0].unit == "u"
+
+
+def test_the_rider_torque_causes_are_every_mistake_once_and_taken_whole():
+    """For each of the three torques: its sign, and each of the three bodies it does not act
+    on (Mdir acts on the fork, Mped on the rear wheel, Mvue on the frame: thesis section 2);
+    then the three swaps of two columns. Every one is structural and taken at full size.
+    Planted: a body tried twice and the rear wheel never, a flag not True, a swap's label
+    lost."""
+    from comparisons.judgments.causes import torque_causes
+    q = random_states(2, seed=4).q
+    S = np.random.default_rng(0).normal(size=(2, 8, 3))
+    causes = torque_causes(S, q)
+    on = {"Mdir": 4, "Mped": 2, "Mvue": 3}
+    expected = []
+    for name, body in on.items():
+        expected.append(f"sign:S[{name}]")
+        expected += [f"body:S[{name}]->{b}" for b in (2, 3, 4, 5) if b != body]
+    expected += ["swap:S[Mdir,Mped]", "swap:S[Mdir,Mvue]", "swap:S[Mped,Mvue]"]
+    assert [c.id for c in causes] == expected
+    assert all(c.fixed is True and c.kind == "structural" for c in causes)
+    swap = causes[-1]
+    assert swap.label == "rider torques Mped and Mvue swapped (columns of S)"
+
+
+def test_table1_units_are_the_descriptions_last_part():
+    """Units as Table 1 gives them, also where the description holds a comma of its own
+    ('rear body + rider CoM, forward, m'). Planted: the first comma taken, a split count of
+    2, the text before the unit."""
+    from comparisons.judgments.causes import table1_causes
+    from comparisons.judgments.term_checks import model_terms
+    from reference_model import load_model
+    bench = load_model("benchmark")
+    units = {c.id: c.unit for c in table1_causes(bench, random_states(1, seed=1), model_terms,
+                                                 ["M"])}
+    assert {k: units[f"table1:{k}"] for k in ("w", "lam", "g", "mR", "IRxx", "xB", "zH")} == \
+        {"w": "m", "lam": "rad", "g": "m/s^2", "mR": "kg", "IRxx": "kg m^2", "xB": "m", "zH": "m"}
+
+
+def test_a_model_without_its_own_table1_gets_one_by_conversion():
+    """The benchmark bicycle with its stored Table 1 taken away (as a bicycle built from
+    model parameters has none): Table 1 is recovered by converting the parameters back, and
+    its wheelbase is Meijaard's 1.02 m (Table 1, to round-off). Planted: the conversion's
+    input dropped."""
+    import dataclasses
+    from comparisons.judgments.causes import table1_of
+    from reference_model import load_model
+    bench = load_model("benchmark")
+    bare = bench.with_params(dataclasses.replace(bench.params, benchmark=None))
+    assert bare.params.benchmark is None
+    table = table1_of(bare)
+    assert table is not None and abs(table.as_dict()["w"] - 1.02) < 1e-12
