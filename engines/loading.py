@@ -212,7 +212,6 @@ def parse_engine_options(spec: str, pairs: Sequence[str]) -> dict[str, Any]:
         params = dict(list(inspect.signature(cls.__init__).parameters.items())[2:])
     except (TypeError, ValueError):  # pragma: no cover
         params = {}
-    names, anything = _option_names(cls)
     out: dict[str, Any] = {}
     for pair in pairs:
         key, eq, value = pair.partition("=")

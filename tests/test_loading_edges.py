@@ -393,3 +393,31 @@ def test_split_options_by_what_the_method_takes():
         pass
     assert split_options(run, {"step": 1, "tol": 2}) == ({"step": 1}, {"tol": 2})
     assert split_options(anything, {"step": 1, "tol": 2}) == ({"step": 1, "tol": 2}, {})
+
+
+def test_the_messages_list_every_item_and_name_an_unnamed_model(eng, tmp_path):
+    """Two unknown options, two contact models, a model without a name, two specs: each
+    listed with ', ', the nameless model as '?'. Planted: the separators and the '?'
+    changed."""
+    with pytest.raises(EngineSpecError, match=r"takes no options; got aaa, zzz$"):
+        load_engine(_spec(eng, "Bare"), load_model("thesis"), zzz=1, aaa=2)
+    f = tmp_path / "two.py"
+    f.write_text(ENGINES.replace('contacts = ("thesis",)', 'contacts = ("thesis", "disc")')
+                 .replace('name = "refuses"', 'name = "refuses"\n    contacts = ("thesis",)'))
+
+    class Nameless:
+        contact = "torus"
+    with pytest.raises(UnsupportedModel) as e:
+        load_engine(f"{f}:Typed", Nameless())
+    assert str(e.value).endswith("supports the front-contact models thesis, disc, not 'torus' "
+                                 "of model '?'")
+    Nameless.contact = "thesis"
+    with pytest.raises(UnsupportedModel) as e:
+        load_engine(f"{f}:Refuses", Nameless())
+    assert str(e.value).endswith("cannot represent model '?': no rear wheel of radius 0.3 here")
+    g = tmp_path / "none.py"
+    g.write_text(ENGINES.replace('contacts = ("thesis",)', 'contacts = ()'))
+    with pytest.raises(UnsupportedModel, match=r"supports the front-contact models none, not "):
+        load_engine(f"{g}:Typed", load_model("thesis"))
+    with pytest.raises(EngineSpecError, match=r"that are not in the list a, b$"):
+        load_engines(["a", "b"], None, {"c": {}})
