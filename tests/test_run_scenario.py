@@ -108,3 +108,51 @@ def test_a_declared_difference_is_not_run_and_an_error_is_a_failure(thesis, kind
     broken = run_scenario("eng", _Engine(thesis, error=ZeroDivisionError("step 0")), thesis, sc)
     assert (broken.status, broken.message) == ("failed", "ZeroDivisionError: step 0")
     assert isinstance(broken, Run) and broken.seconds >= 0
+
+
+def _identity(run):
+    return (run.engine, run.scenario, run.model, run.kind)
+
+
+class _NoDdq(_Engine):
+    """An engine whose inverse result has no accelerations (an older engine's)."""
+
+    def run_inverse(self, scenario):
+        res = run_inverse(self.model, scenario)
+
+        class Bare:
+            motion, T, lam, status = res.motion, res.T, res.lam, res.status
+        return Bare()
+
+
+def test_every_path_keeps_the_run_s_identity_and_its_duration(thesis):
+    """Each kind of outcome names its engine label, scenario, model and kind, and its wall
+    time is a duration no longer than the call. Planted: any of them dropped (None), the time
+    as perf_counter() + t0, the inverse run's rates lost, the ddq lookup without default."""
+    inv, fwd = SCENARIOS["check"], SCENARIOS["stability-psid5"]
+    cases = [
+        (lambda: run_scenario("a", None, thesis, fwd, kinds=("inverse",)), ("a", fwd.name, "forward")),
+        (lambda: run_scenario("b", _NoDdq(thesis), thesis, inv), ("b", inv.name, "inverse")),
+        (lambda: run_scenario("c", _Engine(thesis), thesis, fwd), ("c", fwd.name, "forward")),
+        (lambda: run_scenario("d", _Engine(thesis, error=CapabilityError("x")), thesis, fwd),
+         ("d", fwd.name, "forward")),
+        (lambda: run_scenario("e", _Engine(thesis, error=KeyError("k")), thesis, inv),
+         ("e", inv.name, "inverse")),
+    ]
+    for make, (label, scenario, kind) in cases:
+        t0 = time.perf_counter()
+        run = make()
+        took = time.perf_counter() - t0
+        assert _identity(run) == (label, scenario, "thesis", kind)
+        assert 0 <= run.seconds <= took, (label, run.seconds, took)
+    run = run_scenario("b", _NoDdq(thesis), thesis, inv)
+    assert run.ddq is None
+    np.testing.assert_array_equal(run.dq, run_inverse(thesis, inv).motion.dq)
+
+
+def test_an_engine_that_fails_to_resolve_does_not_hide_those_after_it(monkeypatch):
+    """Planted: break for continue (every engine after a broken one left out)."""
+    from engines import defaults
+    monkeypatch.setattr(defaults, "available_engines",
+                        lambda: ("reference", "no-such-engine-xyz", "reference"))
+    assert defaults.installed_engines() == ("reference", "reference")
