@@ -14,7 +14,8 @@ import pytest
 import engines
 from engines import (EngineError, EngineLoadError, EngineSpecError, available_engines,
                      engine_info, load_engine, load_engines)
-from engines.registry import GROUP, _pyproject_registrations
+from engines.registry import _pyproject_registrations
+from fake_dist import dist_info as _dist_info
 
 BUILTINS = ("reference", "pinocchio", "exudyn")
 
@@ -57,12 +58,6 @@ NOT_AN_ENGINE = object
 '''
 
 
-def _dist_info(root: Path, dist: str, version: str, entries: dict[str, str]) -> None:
-    info = root / f"{dist.replace('-', '_')}-{version}.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {dist}\nVersion: {version}\n")
-    lines = "".join(f"{k} = {v}\n" for k, v in entries.items())
-    (info / "entry_points.txt").write_text(f"[{GROUP}]\n{lines}")
 
 
 @pytest.fixture

@@ -359,16 +359,13 @@ def test_the_listing_shows_every_registration_even_after_failures(tmp_path, monk
     """Three registrations of a third party, in name order: one whose module is missing, one
     whose extra is not installed, one that works; each is listed with its name, target and
     source. Planted: break for continue (the rest not listed), a field dropped (None)."""
-    from engines import registry
+    from fake_dist import dist_info
     (tmp_path / "listing_ok_xyz.py").write_text(ENGINES)
     (tmp_path / "listing_extra_xyz.py").write_text("REQUIRES = ('no_such_xyz',)\nEXTRA = 'gpu'\n"
                                                    + ENGINES)
-    info = tmp_path / "listing_xyz-0.1.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: listing-xyz\nVersion: 0.1\n")
-    (info / "entry_points.txt").write_text(
-        f"[{registry.GROUP}]\nzz-a = listing_gone_xyz:Typed\nzz-b = listing_extra_xyz:Typed\n"
-        "zz-c = listing_ok_xyz:Typed\n")
+    dist_info(tmp_path, "listing-xyz", "0.1", {"zz-a": "listing_gone_xyz:Typed",
+                                               "zz-b": "listing_extra_xyz:Typed",
+                                               "zz-c": "listing_ok_xyz:Typed"})
     monkeypatch.syspath_prepend(str(tmp_path))
     try:
         listed = [i for i in engine_info() if i.name.startswith("zz-")]

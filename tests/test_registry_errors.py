@@ -240,13 +240,10 @@ def test_missing_modules_counts_a_refused_lookup_as_missing():
 def _registered(tmp_path, monkeypatch, name: str, target: str, module: str = "",
                 dist: str = "third-xyz"):
     """A distribution ``dist`` 0.1 registering ``name = target`` (and a module file)."""
-    from engines import registry
+    from fake_dist import dist_info
     if module:
         _write(tmp_path / f"{target.split(':')[0].strip()}.py", module)
-    info = tmp_path / f"{dist.replace('-', '_')}-0.1.dist-info"
-    info.mkdir(parents=True)
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {dist}\nVersion: 0.1\n")
-    (info / "entry_points.txt").write_text(f"[{registry.GROUP}]\n{name} = {target}\n")
+    dist_info(tmp_path, dist, "0.1", {name: target})
     monkeypatch.syspath_prepend(str(tmp_path))
 
 
