@@ -163,7 +163,13 @@ def _sha(paths) -> str:
 
 
 def _narrowed(text: str, module: str, tests: list[str], children_timeout: float | None) -> str:
-    """pyproject.toml with ``[tool.mutmut]``'s ``only_mutate`` and test selection narrowed."""
+    """pyproject.toml with ``[tool.mutmut]``'s ``only_mutate`` and test selection narrowed.
+
+    Entries of ``tests`` that start with ``-`` are pytest options written as one word
+    (``--conformance-depth=quick``, ``-k=pinocchio``): they go to ``pytest_add_cli_args``,
+    which mutmut gives every run, the per-mutant ones included (it gives those the node ids
+    only, not the selection), so the conformance suite's tests of one engine at one depth are
+    the same tests in every run."""
     lines = text.splitlines(keepends=True)
     start = next(i for i, ln in enumerate(lines) if ln.strip() == "[tool.mutmut]")
     end = next((i for i in range(start + 1, len(lines)) if re.match(r"^\s*\[", lines[i])),
@@ -171,7 +177,9 @@ def _narrowed(text: str, module: str, tests: list[str], children_timeout: float 
     cfg = dict(tomllib.loads("".join(lines[start:end]))["tool"]["mutmut"])
     cfg["only_mutate"] = [module]
     cfg["do_not_mutate"] = []
-    cfg["pytest_add_cli_args_test_selection"] = tests
+    options = [t for t in tests if t.startswith("-")]
+    cfg["pytest_add_cli_args_test_selection"] = [t for t in tests if not t.startswith("-")]
+    cfg["pytest_add_cli_args"] = [*cfg.get("pytest_add_cli_args", []), *options]
     if children_timeout is not None:
         cfg["timeout_multiplier"] = children_timeout
     body = "".join(f"{k} = {json.dumps(v)}\n" for k, v in cfg.items())   # JSON's lists are TOML's

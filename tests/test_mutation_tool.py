@@ -44,7 +44,7 @@ def test_a_module_gets_its_own_selection_or_the_whole_one():
     # every selected test file exists (a typo would make mutmut collect nothing)
     for tests in per.values():
         for t in tests:
-            assert (ROOT / t.split("::")[0]).is_file(), t
+            assert t.startswith("-") or (ROOT / t.split("::")[0]).is_file(), t
 
 
 def test_the_scratch_configuration_narrows_only_the_mutmut_table():
@@ -62,6 +62,19 @@ def test_the_scratch_configuration_narrows_only_the_mutmut_table():
     assert out["project"] == before["project"]
     assert out["tool"]["bicycle-xval"] == before["tool"]["bicycle-xval"]
     assert out["tool"]["pytest"] == before["tool"]["pytest"]
+
+
+def test_options_in_a_selection_reach_every_run_of_it():
+    """mutmut gives its per-mutant runs the node ids and ``pytest_add_cli_args`` only: an option
+    left in the selection (the conformance suite's depth, an engine's -k) would be lost there,
+    and the mutant run at another depth than the one its tests were recorded at."""
+    text = (ROOT / "pyproject.toml").read_text("utf-8")
+    sel = ["tests/test_a.py", "comparisons/conformance/test_conformance.py",
+           "--conformance-depth=quick", "-k=pinocchio"]
+    mm = tomllib.loads(mutation._narrowed(text, "engines/pinocchio/engine.py", sel, None))["tool"]["mutmut"]
+    before = tomllib.loads(text)["tool"]["mutmut"]["pytest_add_cli_args"]
+    assert mm["pytest_add_cli_args_test_selection"] == sel[:2]
+    assert mm["pytest_add_cli_args"] == [*before, "--conformance-depth=quick", "-k=pinocchio"]
 
 
 def test_a_result_is_stale_once_its_module_changes(tmp_path):
