@@ -156,3 +156,113 @@ def test_a_model_without_its_own_table1_gets_one_by_conversion():
     assert bare.params.benchmark is None
     table = table1_of(bare)
     assert table is not None and abs(table.as_dict()["w"] - 1.02) < 1e-12
+
+
+# -- Table 1 inputs whose perturbation is invalid on one side ----------------------------------
+
+def _table1_bike(**change):
+    """The benchmark bicycle built from its Table 1 with ``change`` (the triangle inequality
+    not insisted on, as a measured bicycle near a bound may need)."""
+    from reference_model import load_model
+    from reference_model.parameters import Parameters
+    bench = load_model("benchmark")
+    values = {**bench.params.benchmark.as_dict(), **change}
+    return bench.with_params(Parameters.from_benchmark(values, name="edge",
+                                                       allow_triangle_violation=True)), values
+
+
+def _terms_at(values, states):
+    """M of the bicycle of Table 1 ``values``, built here (not through the causes)."""
+    from comparisons.judgments.term_checks import model_terms
+    from reference_model import load_model
+    from reference_model.parameters import Parameters
+    bench = load_model("benchmark")
+    m = bench.with_params(Parameters.from_benchmark(values, name="x", allow_triangle_violation=True))
+    return model_terms(m, states)["M"]
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_an_input_at_the_edge_of_validity_gets_a_one_sided_difference(side):
+    """IBxz within 3e-7 of sqrt(IBxx IBzz) (the rear body's tensor barely positive definite),
+    positive or negative: one side of the 1e-6 relative perturbation is not a valid bicycle,
+    so the derivative is the one-sided difference over h alone. M is linear in IBxz, so the
+    expected derivative is the difference over a step 1000 times larger taken away from the
+    bound, computed here (exact to round-off). Planted: the width 2h kept on one side (the
+    derivative halved), the missing side's terms taken from the other side, the input
+    skipped when one side is missing (`or` for `and`), the model built with the strict
+    triangle (both sides refused)."""
+    from comparisons.judgments.causes import table1_causes
+    from comparisons.judgments.term_checks import model_terms
+    import math
+    from reference_model import load_model
+    t = load_model("benchmark").params.benchmark.as_dict()
+    edge = side * math.sqrt(t["IBxx"] * t["IBzz"]) * (1 - 3e-7)
+    bike, values = _table1_bike(IBxz=edge)
+    states = random_states(2, seed=3)
+    (c,) = [c for c in table1_causes(bike, states, model_terms, ["M"]) if c.id == "table1:IBxz"]
+    d = 1e-3 * abs(edge)
+    expected = (_terms_at(values, states)
+                - _terms_at({**values, "IBxz": edge - side * d}, states)) / (side * d)
+    got = c.effects[("M", None)]
+    assert np.abs(expected).max() > 0.1
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-6 * np.abs(expected).max())
+
+
+def test_a_zero_input_is_perturbed_by_an_absolute_step():
+    """IHxz = 0 (a handlebar with a symmetric tensor): the step is the absolute 1e-7 kg m^2,
+    which keeps IHxx IHzz - IHxz^2 > 0 on both sides, and the derivative of M (linear in
+    IHxz) is the one a larger step gives, computed here. Planted: an absolute step of ~1 kg
+    m^2 (both sides refused: the cause missing), a relative step at zero (no step: 0/0)."""
+    from comparisons.judgments.causes import table1_causes
+    from comparisons.judgments.term_checks import model_terms
+    bike, values = _table1_bike(IHxz=0.0)
+    states = random_states(2, seed=4)
+    (c,) = [c for c in table1_causes(bike, states, model_terms, ["M"]) if c.id == "table1:IHxz"]
+    d = 1e-4
+    expected = (_terms_at({**values, "IHxz": d}, states) - _terms_at({**values, "IHxz": -d}, states)) / (2 * d)
+    assert np.abs(expected).max() > 0.1 and c.value == 0.0
+    np.testing.assert_allclose(c.effects[("M", None)], expected, rtol=0,
+                               atol=1e-6 * np.abs(expected).max())
+
+
+def test_a_nonlinear_input_gets_a_small_central_difference():
+    """The steer axis tilt lam enters M through sines and cosines: a step of the input's own
+    size (instead of 1e-6 of it) would give a secant far from the derivative. Expected: a
+    central difference with the step 1e-5 rad computed here (its error ~(1e-5)^2 of M's third
+    derivative, below 1e-8 of the derivative's size). Planted: the relative step 1.000001
+    (mutmut's +1 on 1e-6)."""
+    from comparisons.judgments.causes import table1_causes
+    from comparisons.judgments.term_checks import model_terms
+    bike, values = _table1_bike()
+    states = random_states(2, seed=6)
+    (c,) = [c for c in table1_causes(bike, states, model_terms, ["M"]) if c.id == "table1:lam"]
+    d = 1e-5
+    lam = values["lam"]
+    expected = (_terms_at({**values, "lam": lam + d}, states)
+                - _terms_at({**values, "lam": lam - d}, states)) / (2 * d)
+    np.testing.assert_allclose(c.effects[("M", None)], expected, rtol=0,
+                               atol=1e-6 * np.abs(expected).max())
+
+
+def test_the_slips_and_steps_raise_no_parameter_warning():
+    """A slip's values are unusual by design (a trail of the other sign, lam read as degrees),
+    and diagnose prints its own findings: the ParameterWarnings such candidates raise are not
+    the user's, and must not reach them (on a bicycle on the Moon, g = 1.62 m/s^2, every
+    candidate warns). Run with ParameterWarning an error. Planted: either
+    warning filter removed (table1's `built`, `changed_terms`)."""
+    import warnings
+    from comparisons.judgments.causes import changed_terms, table1_causes
+    from comparisons.judgments.term_checks import model_terms
+    from reference_model import load_model
+    from reference_model.parameters import ParameterWarning
+    bench = load_model("benchmark")
+    with warnings.catch_warnings():       # the user's own bicycle warns once, when loaded
+        warnings.simplefilter("ignore", ParameterWarning)
+        moon, _ = _table1_bike(g=1.62)    # every candidate built from it has the unusual g
+    states = random_states(1, seed=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ParameterWarning)
+        causes = table1_causes(moon, states, model_terms, ["M"])
+        assert {"table1:g", "table1:lam-deg2rad"} <= {c.id for c in causes}
+        # g = 1.62 m/s^2 (the Moon's) is valid but unusual: a warning if not filtered
+        assert changed_terms(bench, states, model_terms, ["M"], g=1.62) is not None
