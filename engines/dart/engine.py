@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from reference_model import COORDINATES, Model
+from reference_model import Model
 from reference_model.model import ForwardResult, torque_array
 
 from ..base import CAPABILITIES, CapabilityError, Engine
@@ -86,7 +86,7 @@ class DartEngine(DifferenceEigenvalues, Engine):
         self._terms = TermsOf(self.skeleton, self.dofs, model.params,
                               model.contact == "disc")
         # duck-typed attributes the reference solvers read
-        self.params, self.contact, self.coordinates = model.params, model.contact, COORDINATES
+        self.params, self.contact = model.params, model.contact
         # DART's runs approximate the rolling disc (cylinders on the ground); the thesis's
         # fork-axis front contact has no counterpart in a collision detector
         if model.contact != "disc":

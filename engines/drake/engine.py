@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from reference_model import COORDINATES, Model
+from reference_model import Model
 from reference_model.model import ForwardResult, raise_on_status, torque_array
 
 from pydrake.multibody.tree import MultibodyForces
@@ -98,7 +98,6 @@ class DrakeEngine(DifferenceEigenvalues, Engine):
         self._no_forces = MultibodyForces(self.plant)
         # duck-typed attributes the reference solvers read
         self.params, self.contact = model.params, model.contact
-        self.coordinates = COORDINATES
         # forward runs approximate the disc contact (a rolling cylinder); the thesis's
         # fork-axis front contact has no counterpart in Drake's contact
         if model.contact != "disc":

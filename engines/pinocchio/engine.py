@@ -199,7 +199,6 @@ class PinocchioEngine(DifferenceEigenvalues, Engine):
         self._disc = model.contact == "disc"
         # duck-typed attributes the reference solvers read
         self.params, self.contact = p, model.contact
-        self.coordinates = COORDINATES
         # what depends on the model only
         self._row_mask = np.vstack([_support_mask(pm, j) for j in ROW_BODIES])
         self._torque_mask = np.column_stack([_support_mask(pm, j) for j, _ in TORQUE_AXES])
