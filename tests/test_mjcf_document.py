@@ -33,7 +33,8 @@ def test_each_line_is_one_element_indented_by_its_depth(params, rear_height):
     holds text outside a tag (MJCF elements have no character data), and the document parses
     to one <mujoco> with every body closed. Planted: the chain's indentation not grown per
     link (`=` for `+=`), its closing tags dedented by 1 or 3 levels, or never; text around
-    a closing tag ('XX  </worldbody>XX')."""
+    a closing tag ('XX  </worldbody>XX'), the lines joined by more than a newline; the slide's
+    joint not named zc (the MuJoCo engine reads it by name)."""
     lines = _body(mjcf_text(params, rear_height=rear_height))
     depth = 0
     for ln in lines:
@@ -51,9 +52,10 @@ def test_each_line_is_one_element_indented_by_its_depth(params, rear_height):
     assert all((e.text or "").strip() == "" and (e.tail or "").strip() == "" for e in root.iter())
     links = ["xc_link", "yc_link"] + (["zc_link"] if rear_height else []) + ["yaw", "lean"]
     chain = root.find("worldbody")
-    for name in links:           # each massless link nests the next
+    joints = ["xc", "yc"] + (["zc"] if rear_height else []) + ["phi", "theta"]
+    for name, joint in zip(links, joints):      # each massless link nests the next
         chain = chain.find("body")
-        assert chain.get("name") == name
+        assert chain.get("name") == name and chain.find("joint").get("name") == joint
     assert [b.get("name") for b in chain.findall("body")] == ["rear_wheel", "frame"]
 
 
@@ -61,13 +63,39 @@ def test_the_comment_states_the_variant_it_describes(params):
     """The comment tells a reader what the file leaves out: the rear contact's height is a
     slide zc in the forward-run variant (and said so), while the export's own variant tells
     how to add it; g and cv in the model's numbers. Planted: either variant's sentence given
-    to both or to none (`and False`, `or True`)."""
+    to both or to none (`and False`, `or True`); the contact's note wrong for the thesis's
+    fork-axis contact (the file only approximates the disc's)."""
     export = mjcf_text(params).split("-->")[0]
     run = mjcf_text(params, rear_height=True).split("-->")[0]
     assert "with a slide zc" not in export and "FOR A FORWARD RUN" in export
     assert "with a slide zc" in run and "FOR A FORWARD RUN" not in run
     assert f"g = {params.g:g} m/s^2" in export.replace("\n", " ") or f"g = {params.g!r}" in export
     assert "cv = " in export
+    thesis = mjcf_text(load_model("thesis").params).split("-->")[0].replace("\n  ", " ")
+    assert "approximates this model's rolling-disc contact" in export.replace("\n  ", " ")
+    assert "NOT this model's thesis fork-axis front contact" in thesis
+
+
+def test_settings_are_stored_as_floats_whatever_sequence_is_given():
+    """solref and solimp given as lists of ints and floats are kept as tuples of floats (as
+    the dataclass's types and `as_dict` say), the scalars as floats. Planted: the checked
+    tuples stored under another name (the input list kept)."""
+    s = MjcfSettings(solref=[1, 1], solimp=[0.9, 0.95, 1, 0.5, 2], timestep=1, friction=2)
+    assert s.solref == (1.0, 1.0) and type(s.solref) is tuple
+    assert s.solimp == (0.9, 0.95, 1.0, 0.5, 2.0) and type(s.solimp) is tuple
+    assert type(s.timestep) is float and type(s.friction) is float
+
+
+@pytest.mark.parametrize("field, allowed", [
+    ("integrator", ("Euler", "implicit", "implicitfast", "RK4")),   # MuJoCo's option/integrator
+    ("cone", ("elliptic", "pyramidal")),
+    ("solver", ("Newton", "CG", "PGS")),
+])
+def test_a_choice_lists_what_mujoco_accepts(field, allowed):
+    """The refusal lists MuJoCo's own values for the attribute (its XML reference), comma
+    separated. Planted: the separator changed."""
+    with pytest.raises(ValueError, match=f"must be one of {', '.join(allowed)}; fix: "):
+        MjcfSettings(**{field: "nope"})
 
 
 def test_the_arguments_are_checked_by_type(params):
