@@ -15,6 +15,7 @@ import pytest
 
 from comparisons.judgments.terms import random_states
 from reference_model import load_model
+from round_off import assert_round_off
 from reference_model.model import ModelEvaluationError
 from reference_model.scenarios import SCENARIOS
 
@@ -36,11 +37,6 @@ def engine(model):
     return PinocchioEngine(model)
 
 
-def _close(got, expected):
-    expected = np.asarray(expected, dtype=float)
-    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * max(1.0, np.abs(expected).max()))
-
-
 @pytest.mark.parametrize("form", ["tuple", "list", "float32", "int", "float64"])
 def test_one_state_forward_takes_torques_in_any_form(engine, model, form):
     """One state with the torques as a tuple, a list, a float32 or an integer array, or the
@@ -55,15 +51,15 @@ def test_one_state_forward_takes_torques_in_any_form(engine, model, form):
     got = engine.forward(q, dq, values)
     ref = model.forward(q, dq, np.asarray(values, dtype=float))
     assert got.status.tolist() == [0]
-    _close(got.ddq, ref.ddq)
-    _close(got.lam, ref.lam)
+    assert_round_off(got.ddq, ref.ddq)
+    assert_round_off(got.lam, ref.lam)
 
 
 def test_the_default_torques_are_zero_for_one_state(engine, model):
     """Planted: the default tuple handed to the solve unconverted."""
     q, dq = STATES.q[1], STATES.dq[1]
-    _close(engine.forward(q, dq).ddq, model.forward(q, dq).ddq)
-    _close(engine.forward_acceleration(q, dq), model.forward_acceleration(q, dq))
+    assert_round_off(engine.forward(q, dq).ddq, model.forward(q, dq).ddq)
+    assert_round_off(engine.forward_acceleration(q, dq), model.forward_acceleration(q, dq))
 
 
 def test_integer_states_are_read_as_floats(engine, model):
@@ -72,9 +68,9 @@ def test_integer_states_are_read_as_floats(engine, model):
     q = [0, 0, 0, 0, 0, 0, 0, 0]
     dq = [1, 0, 0, 0, 0, 0, 2, 0]
     ref = model.forward(np.array(q, float), np.array(dq, float), T3)
-    _close(engine.forward(q, dq, T3).ddq, ref.ddq)
+    assert_round_off(engine.forward(q, dq, T3).ddq, ref.ddq)
     batch = engine.forward([q, q], dq, T3)
-    _close(batch.ddq, np.vstack([ref.ddq, ref.ddq]))
+    assert_round_off(batch.ddq, np.vstack([ref.ddq, ref.ddq]))
 
 
 def test_a_batch_takes_one_rate_row_and_per_state_torques(engine, model):
@@ -87,8 +83,8 @@ def test_a_batch_takes_one_rate_row_and_per_state_torques(engine, model):
     got = engine.forward(STATES.q, dq, T)
     ref = model.forward(STATES.q, np.tile(dq, (3, 1)), T)
     assert got.status.dtype == np.intc and got.status.shape == (3,) and not got.status.any()
-    _close(got.ddq, ref.ddq)
-    _close(got.lam, ref.lam)
+    assert_round_off(got.ddq, ref.ddq)
+    assert_round_off(got.lam, ref.lam)
 
 
 def test_each_failed_solve_has_its_status(engine):
@@ -125,14 +121,14 @@ def test_the_thesis_solve_splits_its_unknowns(engine, model):
     assert [np.shape(x) for x in one] == [(8,), (3,), (5,), (1,)]
     assert one[3].dtype == np.intc and not one[3].any()
     for got, want in zip(one[:3], ref[:3]):
-        _close(got, want)
+        assert_round_off(got, want)
     inds = np.array([ind, -ind, 2 * ind])
     many = engine.inverse_dynamics_step(STATES.q, STATES.dq, inds)
     refs = model.inverse_dynamics_step(STATES.q, STATES.dq, inds)
     assert [np.shape(x) for x in many] == [(3, 8), (3, 3), (3, 5), (3,)]
     assert many[3].dtype == np.intc and not many[3].any()
     for got, want in zip(many[:3], refs[:3]):
-        _close(got, want)
+        assert_round_off(got, want)
 
 
 def test_generalized_forces_with_torques_one_state_and_a_batch(engine, model):
@@ -142,9 +138,9 @@ def test_generalized_forces_with_torques_one_state_and_a_batch(engine, model):
     q, dq = STATES.q[0], STATES.dq[0]
     one = engine.generalized_forces(q, dq, T3)
     assert one.shape == (8,)
-    _close(one, model.generalized_forces(q, dq, T3))
+    assert_round_off(one, model.generalized_forces(q, dq, T3))
     T = np.array([T3, (0.0, 0.0, 1.0), (2.0, 2.0, 2.0)])
-    _close(engine.generalized_forces(STATES.q, STATES.dq, T),
+    assert_round_off(engine.generalized_forces(STATES.q, STATES.dq, T),
            model.generalized_forces(STATES.q, STATES.dq, T))
 
 
