@@ -98,6 +98,13 @@ def test_a_choice_lists_what_mujoco_accepts(field, allowed):
         MjcfSettings(**{field: "nope"})
 
 
+def test_condim_lists_mujocos_contact_dimensions():
+    """MuJoCo's condim for a frictional contact: 3, 4 or 6 (1 is frictionless). Planted: the
+    separator changed."""
+    with pytest.raises(ValueError, match=r"^MJCF setting condim = 2: must be one of 3, 4, 6; fix: 3 "):
+        MjcfSettings(condim=2)
+
+
 def test_the_arguments_are_checked_by_type(params):
     """Planted: the TypeErrors' messages lost (None)."""
     with pytest.raises(TypeError, match=r"^mjcf_text needs a reference_model.Parameters, got dict$"):
@@ -123,12 +130,15 @@ def test_the_arguments_are_checked_by_type(params):
 def test_solimp_has_mujocos_bounds(solimp, ok):
     """MuJoCo's solimp: 0 < dmin <= dmax < 1, width > 0, 0 < midpoint < 1, power >= 1, each
     bound tried at its edge. Planted: every comparison's edge moved (`<=` for `<`, `<` for
-    `<=`, 2 for 1, `>` for `>=`)."""
+    `<=`, 2 for 1, `>` for `>=`); the refusal's fix mangled."""
     if ok:
         assert MjcfSettings(solimp=solimp).solimp == solimp
     else:
-        with pytest.raises(ValueError, match=r"^MJCF setting solimp = .*: needs 0 < dmin <= dmax < 1"):
+        with pytest.raises(ValueError, match=r"^MJCF setting solimp = .*: needs 0 < dmin <= dmax < 1, "
+                           r"width > 0, 0 < midpoint < 1, power >= 1; fix: e\.g\. (\(.*\))$") as err:
             MjcfSettings(solimp=solimp)
+        example = ast.literal_eval(re.search(r"e\.g\. (\(.*\))$", str(err.value)).group(1))
+        assert MjcfSettings(solimp=example).solimp == example      # the suggested fix works
 
 
 BAD = [
