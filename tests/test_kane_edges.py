@@ -7,6 +7,7 @@ quantity's size (they agree to ~3e-11 relative there). Each test names the plant
 (mutmut's survivors of its first run) it was seen failing on."""
 
 import dataclasses
+import re
 import warnings
 
 import numpy as np
@@ -64,18 +65,14 @@ def test_a_state_of_the_wrong_shape_is_refused_by_name(engine, shape):
     """Planted: the shape test's `or` as `and` (a (2, 3, 8) array let through), the message
     lost, the argument's name lost or changed."""
     good = STATES.q[0]
-    with pytest.raises(ValueError, match=rf"^q must have shape \(8,\) or \(N, 8\); got {re_shape(shape)}$"):
+    with pytest.raises(ValueError, match=rf"^q must have shape \(8,\) or \(N, 8\); got {re.escape(str(shape))}$"):
         engine.mass_matrix(np.zeros(shape))
-    with pytest.raises(ValueError, match=rf"^q must have shape \(8,\) or \(N, 8\); got {re_shape(shape)}$"):
+    with pytest.raises(ValueError, match=rf"^q must have shape \(8,\) or \(N, 8\); got {re.escape(str(shape))}$"):
         engine.forward(np.zeros(shape), good)
-    with pytest.raises(ValueError, match=rf"^dq must have shape \(8,\) or \(N, 8\); got {re_shape(shape)}$"):
+    with pytest.raises(ValueError, match=rf"^dq must have shape \(8,\) or \(N, 8\); got {re.escape(str(shape))}$"):
         engine.forward(good, np.zeros(shape))
-    with pytest.raises(ValueError, match=rf"^dq must have shape \(8,\) or \(N, 8\); got {re_shape(shape)}$"):
+    with pytest.raises(ValueError, match=rf"^dq must have shape \(8,\) or \(N, 8\); got {re.escape(str(shape))}$"):
         engine.constraint_bias(good, np.zeros(shape))
-
-
-def re_shape(shape):
-    return str(shape).replace("(", r"\(").replace(")", r"\)")
 
 
 @pytest.mark.parametrize("call", ["forward", "generalized_forces", "constraint_bias"])
