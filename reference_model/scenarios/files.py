@@ -118,16 +118,12 @@ class _Reader:
     def fail(self, key: str, problem: str, fix: str):
         raise ScenarioFileError(self.file, key, problem, fix)
 
-    def table(self, name: str, required: bool = False) -> dict[str, Any]:
+    def require(self, name: str) -> None:
+        """Refuse a document without the table ``name`` (every table is a table here:
+        `_check_keys` refused any other value first)."""
         if name not in self.data:
-            if required:
-                self.fail(name, f"table [{name}] is missing",
-                          f"add [{name}] with " + ", ".join(_KEYS[name][:3]))
-            return {}
-        value = self.data[name]
-        if not isinstance(value, dict):
-            self.fail(name, f"{name!r} must be a table", f"write it as [{name}]")
-        return value
+            self.fail(name, f"table [{name}] is missing",
+                      f"add [{name}] with " + ", ".join(_KEYS[name][:3]))
 
     def string(self, table: str, key: str, choices=None, default=None) -> str:
         section = self.data.get(table, {})
@@ -146,8 +142,8 @@ class _Reader:
                       + "use one of " + ", ".join(repr(c) for c in choices))
         return value
 
-    def number(self, table: str, key: str, default: float | None = None, *,
-               positive: bool = False, unit: str = "") -> float:
+    def number(self, table: str, key: str, default: float | None = None, *, unit: str,
+               positive: bool = False) -> float:
         section = self.data.get(table, {})
         if key not in section:
             if default is not None:
@@ -157,14 +153,14 @@ class _Reader:
         value = section[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             self.fail(f"{table}.{key}", f"{value!r} is not a finite number",
-                      f"write a number in {unit}" if unit else "write a number")
+                      f"write a number in {unit}")
         if positive and not value > 0:
             self.fail(f"{table}.{key}", f"{key} = {value!r} must be > 0",
                       f"use a positive value in {unit}")
         return float(value)
 
     def strings(self, table: str, key: str, choices=None) -> tuple[str, ...]:
-        value = self.data.get(table, {}).get(key, [])
+        value = self.data[table].get(key, [])
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             self.fail(f"{table}.{key}", f"{value!r} is not a list of strings",
                       f'write {key} = ["...", "..."]')
@@ -201,7 +197,7 @@ def _check_keys(r: _Reader) -> None:
 
 
 def _grid(r: _Reader) -> tuple[float, float, int]:
-    r.table("grid", required=True)
+    r.require("grid")
     start = r.number("grid", "start", 0.0, unit="s")
     step = r.number("grid", "step", positive=True, unit="s")
     section = r.data["grid"]
@@ -224,7 +220,7 @@ def _grid(r: _Reader) -> tuple[float, float, int]:
 
 
 def _torques(r: _Reader, base: Path, grid: tuple[float, float, int]):
-    section = r.table("inputs")
+    section = r.data["inputs"]
     given = [k for k in ("torques", "csv") if k in section]
     if len(given) != 1:
         r.fail("inputs.torques", "give exactly one of torques (constant or named function) "
@@ -255,20 +251,20 @@ def _torques(r: _Reader, base: Path, grid: tuple[float, float, int]):
 def _csv_torques(r: _Reader, base: Path, grid) -> TorqueSamples:
     name = r.string("inputs", "csv")
     interpolation = r.string("inputs", "interpolation", tuple(INTERPOLATIONS))
-    path = Path(name) if Path(name).is_absolute() else base / name
+    path = base / name                   # an absolute name stays itself (pathlib's join)
     try:
         with open(path, newline="", encoding="utf-8") as handle:
-            rows = list(csv.reader(handle))
+            reader = csv.reader(handle)      # blank lines skipped, each row with its line number
+            rows = [(reader.line_num, row) for row in reader if any(c.strip() for c in row)]
     except OSError as exc:
         r.fail("inputs.csv", f"cannot read {str(path)!r}: {exc.strerror or exc}",
                "give the path of a CSV file relative to the scenario file")
-    rows = [row for row in rows if any(cell.strip() for cell in row)]
-    header = [c.strip() for c in rows[0]] if rows else []
+    header = [c.strip() for c in rows[0][1]] if rows else []
     if header != ["t", *TORQUES]:
         r.fail("inputs.csv", f"{path.name}: header {header!r} is not t, Mdir, Mped, Mvue",
                "make the first line 't,Mdir,Mped,Mvue' (s, then N m)")
     data = []
-    for number, row in enumerate(rows[1:], start=2):
+    for number, row in rows[1:]:
         try:
             values = [float(c) for c in row]
         except ValueError:
@@ -296,7 +292,7 @@ def _model(r: _Reader, base: Path) -> str:
     model = r.string("scenario", "model", default="thesis")
     if model in NAMED_MODELS:
         return model
-    path = Path(model) if Path(model).is_absolute() else base / model
+    path = base / model                  # an absolute path stays itself
     if not path.is_file():
         hint = _closest(model, NAMED_MODELS)
         r.fail("scenario.model", f"{model!r} is neither a named model nor an existing file "
@@ -313,12 +309,13 @@ def scenario_from_mapping(data: dict[str, Any], *, source: str = "<memory>",
     r = _Reader(str(source), data)
     base = Path(".") if base is None else base
     _check_keys(r)
-    r.table("scenario", required=True)
+    r.require("scenario")
     kind = r.string("scenario", "kind", ("forward", "inverse"))
     wrong = _INVERSE_ONLY if kind == "forward" else _FORWARD_ONLY
     for table in wrong:
         if table in data:
-            r.fail(table, f"[{table}] does not apply to a {kind} scenario",
+            r.fail(table, f"[{table}] does not apply to {'an' if kind == 'inverse' else 'a'} "
+                   f"{kind} scenario",
                    f"remove [{table}] or set kind = \"{'inverse' if kind == 'forward' else 'forward'}\"")
     grid = _grid(r)
     fields: dict[str, Any] = dict(
@@ -329,15 +326,15 @@ def scenario_from_mapping(data: dict[str, Any], *, source: str = "<memory>",
         compared=r.strings("scenario", "compared", tuple(QUANTITIES)),
     )
     if kind == "inverse":
-        r.table("motion", required=True)
+        r.require("motion")
         fields["motion"] = MOTIONS[r.string("motion", "function", tuple(MOTIONS))]
     else:
-        r.table("initial", required=True)
+        r.require("initial")
         q = {c: r.number("initial", c, 0.0, unit="rad" if c not in ("xc", "yc") else "m")
              for c in COORDINATE_ORDER}
         fields["q0"] = tuple(q[c] for c in COORDINATE_ORDER)
         fields["dq_ind0"] = tuple(r.number("initial", k, 0.0, unit="rad/s") for k in RATES)
-        r.table("inputs", required=True)
+        r.require("inputs")
         fields["torques"] = _torques(r, base, grid)
         fields["constraints"] = r.string("solver", "constraints", CONSTRAINT_HANDLING,
                                          default="baumgarte")
@@ -357,9 +354,7 @@ def scenario_from_mapping(data: dict[str, Any], *, source: str = "<memory>",
         diffs.append(ExpectedDifference(*(sub.string(f"expected_differences[{i}]", k)
                                           for k in _KEYS["expected_differences"])))
     fields["expected_differences"] = tuple(diffs)
-    if not fields["compared"]:
-        del fields["compared"]                     # default by kind
-    return Scenario(**fields)
+    return Scenario(**fields)                      # an empty `compared`: the kind's default
 
 
 def load_scenario(path: str | os.PathLike[str]) -> Scenario:
