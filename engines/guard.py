@@ -88,7 +88,8 @@ def _kind(value) -> str:
         return "None"
     if isinstance(value, (str, bytes)):
         return f"a string ({cut(repr(value), 60)})"
-    return f"a {type(value).__name__}"
+    kind = type(value).__name__
+    return f"{'an' if kind[:1].lower() in 'aeiou' else 'a'} {kind}"
 
 
 def _any_array(value, what: str) -> np.ndarray:
@@ -152,7 +153,7 @@ def check_eigenvalues(value, speeds, what: str = "eigenvalues") -> np.ndarray:
 def check_trajectory(traj, what: str = "simulate"):
     """``traj`` if it is a trajectory the harness can use (module docstring); else
     `EngineCallError`. Its arrays are replaced by float copies only when they were not float."""
-    if traj is None or isinstance(traj, (str, bytes)) or not hasattr(traj, "t"):
+    if not hasattr(traj, "t"):          # None and text have no t either
         raise EngineCallError(f"{what} returned {_kind(traj)}, not a "
                               "reference_model.solvers.Trajectory")
     status, message = getattr(traj, "status", None), getattr(traj, "message", None)
@@ -165,7 +166,7 @@ def check_trajectory(traj, what: str = "simulate"):
     if t.ndim != 1:
         raise EngineCallError(f"{what} returned t of shape {t.shape}; expected (N,)")
     n = len(t)
-    if n > 1 and np.any(np.diff(t) < 0):
+    if np.any(np.diff(t) < 0):           # no difference for 0 or 1 sample
         raise EngineCallError(f"{what} returned times that go backwards")
     arrays = {"t": t}
     for field, width, required in (("q", N_Q, True), ("dq", N_Q, True), ("ddq", N_Q, False),
