@@ -147,12 +147,12 @@ class Model:
         self._lib = self.library.lib
         # Single-state fast path: inputs are copied into fixed scratch buffers whose addresses
         # are taken once (numpy's .ctypes.data costs ~1 us per call, more than the C work).
-        self._in = np.zeros(3 * N_Q + 6)                   # q | dq | T (3) | ddq_ind (3)
+        self._in = np.zeros(2 * N_Q + 3)                   # q | dq | T (3)
         self._out = np.zeros(128)
         self._status = np.zeros(1, dtype=np.intc)
         base = self._in.ctypes.data
         self._pq, self._pdq = base, base + 8 * N_Q
-        self._pT, self._pind = base + 16 * N_Q, base + 8 * (2 * N_Q + 3)
+        self._pT = base + 16 * N_Q
         self._pout, self._pst = self._out.ctypes.data, self._status.ctypes.data
         self._kernels = {name: getattr(self._lib, f"bx_{name}_batch") for name in self.library.functions}
 
