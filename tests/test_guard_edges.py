@@ -325,3 +325,16 @@ def test_guard_wraps_the_declared_capabilities_once():
     guard(eng)
     assert vars(eng)["mass_matrix"] is first and is_guarded(eng, "mass_matrix")
     assert not is_guarded(eng, "gravity") and "gravity" not in vars(eng)
+
+
+def test_eigenvalues_called_directly_are_named_eigenvalues_and_need_numbers():
+    """check_eigenvalues's own default name and its dtype refusal. Planted: the default name
+    changed, the name not passed to the array check (None returned ...), the dtype message
+    dropped or its kind read from None."""
+    from engines.guard import check_eigenvalues
+    with pytest.raises(EngineCallError) as info:
+        check_eigenvalues("x", 1.0)
+    assert str(info.value) == "eigenvalues returned a string ('x'), not an array"
+    with pytest.raises(EngineCallError) as info:
+        check_eigenvalues([object()] * 4, 1.0)
+    assert str(info.value) == "eigenvalues returned a list of dtype object, not numbers"
