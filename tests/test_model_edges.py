@@ -70,7 +70,8 @@ def test_forward_is_the_same_on_both_backends_paths_and_batches(thesis, numpy_th
     accelerations, multipliers and the status with its dtype. Planted: the C fast path asked
     for 2 states (its second written over the multipliers), the multipliers read at 9 N_Q,
     N_Q - N_C for N_Q + N_C, lam None, the status buffer float or of 2, each argument of the
-    numpy kernel dropped or None, a1 and a2 swapped or None."""
+    numpy kernel dropped or None, a1 and a2 swapped or None, the batch loop's single-state
+    result read at row 1 or as the whole batch."""
     ab = (3.0, 7.0)
     fast = thesis.forward(Q, DQ, T, baumgarte=ab)
     loop = thesis.forward(BATCH, DBATCH, TBATCH, baumgarte=ab)
@@ -92,6 +93,11 @@ def test_forward_is_the_same_on_both_backends_paths_and_batches(thesis, numpy_th
     assert np.abs(swapped.ddq - fast.ddq).max() > 1e-6
     single = numpy_thesis.forward(Q, DQ, T)
     assert single.ddq.shape == (8,) and single.status.shape == (1,)
+    # one state with its rates as a batch of one: the C batch loop, read back as one state
+    mixed = thesis.forward(Q, DQ[None], T, baumgarte=ab)
+    assert mixed.ddq.shape == (8,) and mixed.lam.shape == (5,) and mixed.status.shape == (1,)
+    assert_round_off(mixed.ddq, fast.ddq)
+    assert_round_off(mixed.lam, fast.lam)
 
 
 def test_the_13x13_system_is_the_same_on_both_backends_and_returns_the_given_accelerations(
