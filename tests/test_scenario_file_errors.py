@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from scenario_text import FORWARD, write
 from reference_model.parameters.loading import NAMED_MODELS
 from reference_model.scenarios.files import (ScenarioFileError, load_builtin_scenarios,
                                              load_scenario, scenario_from_mapping,
@@ -25,21 +26,6 @@ from reference_model.scenarios import (FORWARD_QUANTITIES, INVERSE_QUANTITIES, M
                                        QUANTITIES, SCENARIOS, ExpectedDifference, TorqueSamples)
 from reference_model.scenarios import files as scenario_files
 
-FORWARD = """[scenario]
-name = "mine"
-description = "leaned start, pedalling"
-kind = "forward"
-
-[grid]
-step = 0.01
-duration = 0.5
-
-[initial]
-theta = 0.1
-
-[inputs]
-torques = { Mped = 1.0 }
-"""
 
 TABLES = "scenario, grid, initial, inputs, motion, solver, expected_differences"
 INITIAL_KEYS = "theta, psi, gamma, dtheta, dpsi, dgamma, xc, yc, phi, beta, eps"
@@ -47,12 +33,6 @@ TORQUES_FIX = ('write torques = { Mdir = 0.0, Mped = 1.0, Mvue = 0.0 }, torques 
                'csv = "torques.csv" with interpolation = "cubic"')
 RIDER = "the rider torques are Mdir (steer), Mped (pedal), Mvue (roll)"
 CSV = 'csv = "T.csv"\ninterpolation = "{}"'
-
-
-def write(folder: Path, text: str, name: str = "sc.toml") -> Path:
-    path = folder / name
-    path.write_text(text, encoding="utf-8")
-    return path
 
 
 def refusal(path: Path) -> str:

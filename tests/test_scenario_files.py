@@ -13,33 +13,11 @@ import numpy as np
 import pytest
 
 from python_scenarios import PYTHON_SCENARIOS
+from scenario_text import FORWARD, write
 from reference_model.scenario_files import (BUILTIN_DIR, ScenarioFileError, load_builtin_scenarios,
                                             load_scenario, scenario_toml_text)
 from reference_model.scenarios import (SCENARIOS, MOTIONS, Scenario, TorqueSamples, run_forward,
                                        torque_input)
-
-FORWARD = """[scenario]
-name = "mine"
-description = "leaned start, pedalling"
-kind = "forward"
-
-[grid]
-step = 0.01
-duration = 0.5
-
-[initial]
-theta = 0.1
-dpsi = 5.0
-
-[inputs]
-torques = { Mped = 1.0 }
-"""
-
-
-def write(tmp_path: Path, text: str, name: str = "sc.toml") -> Path:
-    path = tmp_path / name
-    path.write_text(text, encoding="utf-8")
-    return path
 
 
 def test_builtin_files_equal_the_python_statement_field_by_field():
