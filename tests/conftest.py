@@ -12,6 +12,15 @@ from reference_model import Model, load_model
 settings.register_profile("ci", derandomize=True, deadline=None, max_examples=50)
 settings.load_profile("ci")
 
+
+def pytest_configure(config):
+    """In mutmut's stats run only, credit each shared fixture's work to every test using it
+    (tests/mutation_credit.py: otherwise its first test alone gets it)."""
+    import os
+    if os.environ.get("MUTANT_UNDER_TEST") == "stats":
+        from mutation_credit import register
+        register(config)
+
 # the conformance suite's general bicycle: every inertia entry distinct, unequal wheels, an
 # off-axis fork CoM (comparisons/conformance/models.py)
 from comparisons.conformance.models import GENERAL_CHANGES  # noqa: E402

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import mutation
 
+pytest_plugins = ["pytester"]
+
 ROOT = Path(__file__).resolve().parent.parent
 CFG = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["tool"]
 
@@ -183,3 +185,51 @@ def test_a_second_measuring_run_on_the_same_out_stops_at_once(tmp_path):
                 pass
     with mutation.exclusive(tmp_path):     # free again
         pass
+
+
+def test_a_shared_fixtures_work_is_credited_to_every_test_that_uses_it(pytester):
+    """mutmut credits what a module fixture calls to the first test using it alone, so a mutant
+    there never ran the later tests that read the fixture's result. With the credit plugin each
+    test using the fixture is credited with the fixture's functions; a test not using it is not.
+    The expected sets are written from the inner tests' own calls (independent of the plugin)."""
+    from mutation_credit import FixtureCredit
+
+    hits: set[str] = set()
+    credited: dict[str, set[str]] = {}
+
+    class Collector:          # mutmut's StatsCollector, reduced to its teardown
+        def pytest_runtest_teardown(self, item, nextitem):
+            credited[item.name] = set(hits)
+            hits.clear()
+
+    pytester.makepyfile(test_inner="""
+        import pytest
+        HITS = None
+        @pytest.fixture(scope="module")
+        def shared():
+            HITS.add("model.solve")
+            return 1
+        @pytest.fixture
+        def own(shared):
+            HITS.add("model.own")
+        def test_first(shared):
+            HITS.add("judge.first")
+        def test_second(shared):
+            pass
+        def test_through_another(own):
+            pass
+        def test_unrelated():
+            HITS.add("judge.unrelated")
+    """)
+
+    class Inject:
+        def pytest_collection_modifyitems(self, items):
+            items[0].module.HITS = hits
+
+    result = pytester.inline_run("-p", "no:cacheprovider",
+                                 plugins=[FixtureCredit(lambda: hits), Collector(), Inject()])
+    result.assertoutcome(passed=4)
+    assert credited == {"test_first": {"model.solve", "judge.first"},
+                        "test_second": {"model.solve"},
+                        "test_through_another": {"model.solve", "model.own"},
+                        "test_unrelated": {"judge.unrelated"}}
