@@ -185,3 +185,19 @@ def test_an_engine_hanging_on_one_bicycle_costs_its_time_limit(tmp_path, client)
     frame = _results(res)
     assert res.chunks == 1 and list(frame["status"]) == ["agree", "failed"], frame["failures"]
     assert frame["failures"][1] == "timed out after 2 s"
+
+
+@pytest.mark.filterwarnings("error")
+def test_a_text_column_with_no_text_in_any_row_is_written_as_empty_text():
+    """A chunk where no bicycle failed has no `failures` or `localization` text at all: pandas
+    reads that column as float64 NaN, and filling it with "" in place is refused by pandas 3
+    (Pandas4Warning, to become an error). The column must come out as empty strings, with no
+    warning, and the flags as nullable booleans."""
+    cols = ["bicycle", "status", "failures", "localization", "terms_passed", "entry.M.rel"]
+    rows = [{"bicycle": 1, "status": "agree", "terms_passed": True, "entry.M.rel": None},
+            {"bicycle": 0, "status": "agree", "terms_passed": True}]
+    frame = sweep_stage.rows_frame(None, rows, cols)
+    assert frame["bicycle"].tolist() == [0, 1]              # sorted by bicycle
+    assert frame["failures"].tolist() == ["", ""] and frame["localization"].tolist() == ["", ""]
+    assert frame["entry.M.rel"].tolist() == ["", ""]
+    assert str(frame["terms_passed"].dtype) == "boolean"

@@ -123,7 +123,9 @@ def rows_frame(spec: SweepSpec, rows, cols: list[str] | None = None):
         elif c in ("terms_passed", "runs_confirmed"):
             frame[c] = frame[c].astype("boolean")
         elif c.startswith(("entry.", "run.")) or c in ("status", "failures", "localization"):
-            frame[c] = frame[c].fillna("").astype(str)
+            # object first: a column with no text in it (all NaN) is float64, and pandas
+            # refuses to put "" into a float column in place (Pandas4Warning, an error to come)
+            frame[c] = frame[c].astype(object).fillna("").astype(str)
         else:
             frame[c] = frame[c].astype("float64")
     return frame.reset_index(drop=True)
