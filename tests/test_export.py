@@ -115,8 +115,11 @@ def test_json_describes_tree_contact_and_parameters(tmp_path, name):
 
 
 def test_bad_format_and_model_and_no_half_written_file(tmp_path):
-    with pytest.raises(ValueError, match="format 'sdf' is not one of urdf, mjcf, json"):
+    with pytest.raises(ValueError) as err:
         export_model("thesis", "sdf", tmp_path / "b.sdf")
+    # the whole message: the CLI prints it as the fix (the choices and how to write them)
+    assert str(err.value) == ("format 'sdf' is not one of urdf, mjcf, json; use --format urdf, "
+                              "mjcf or json")
     with pytest.raises(ParameterError, match="unknown model 'thesis-dsic'"):
         export_model("thesis-dsic", "urdf", tmp_path / "b.urdf")
     with pytest.raises(OSError):
