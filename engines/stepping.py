@@ -4,9 +4,9 @@ limit, each refused in one line naming the option when it cannot be used."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
+
+from reference_model.solvers import checked_fall_limit
 
 from .base import CapabilityError, EngineUsageError
 
@@ -16,8 +16,10 @@ __all__ = ["forward_grid", "refuse_fork_axis_contact", "steps_per_sample"]
 def forward_grid(scenario, fall_limit, t_end, who: str) -> tuple[np.ndarray, float]:
     """(the scenario's grid cut at ``t_end`` (None: the whole grid), the fall limit in rad);
     ``who`` names the engine in the messages."""
-    if not (isinstance(fall_limit, (int, float)) and math.isfinite(fall_limit) and fall_limit > 0):
-        raise EngineUsageError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
+    try:
+        fall_limit = checked_fall_limit(fall_limit)
+    except ValueError as err:
+        raise EngineUsageError(str(err)) from None
     if scenario.kind != "forward":
         raise EngineUsageError(f"scenario {scenario.name!r} is an inverse scenario; {who} runs "
                                "only forward scenarios")
@@ -26,7 +28,7 @@ def forward_grid(scenario, fall_limit, t_end, who: str) -> tuple[np.ndarray, flo
         grid = grid[grid <= float(t_end) + 1e-12]
         if grid.size < 2:
             raise EngineUsageError(f"t_end = {t_end!r} leaves fewer than 2 grid samples")
-    return grid, float(fall_limit)
+    return grid, fall_limit
 
 
 def refuse_fork_axis_contact(engine) -> None:

@@ -35,6 +35,16 @@ THESIS_BAUMGARTE = (10.0, 10.0)
 DEFAULT_FALL_LIMIT = 1.4  # rad (80 deg): the frame is on the ground well before pi/2
 
 
+def checked_fall_limit(fall_limit) -> float:
+    """The fall limit (the lean |theta| in rad at which a forward run ends as a fall) as a
+    float, or ValueError in one line: a real, finite, positive number (not a bool, not text).
+    The one rule every time loop applies (the reference's solvers, the engines' own)."""
+    if not (isinstance(fall_limit, (int, float, np.floating, np.integer))
+            and not isinstance(fall_limit, bool) and np.isfinite(fall_limit) and fall_limit > 0):
+        raise ValueError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
+    return float(fall_limit)
+
+
 class ConstraintSolveError(ArithmeticError):
     """Newton on [rD]_z = 0 did not converge, or D_dep is singular."""
 
@@ -297,8 +307,7 @@ def simulate(model: Model, q0, dq0, t_eval, torques=(0.0, 0.0, 0.0), *,
     t_eval = np.asarray(t_eval, dtype=np.float64)
     if t_eval.ndim != 1 or t_eval.size < 2 or np.any(np.diff(t_eval) <= 0):
         raise ValueError("t_eval must be a strictly increasing 1-D grid of at least 2 samples")
-    if not fall_limit > 0:
-        raise ValueError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
+    fall_limit = checked_fall_limit(fall_limit)
     torque = _torque_function(torques)
     a12 = tuple(float(a) for a in baumgarte) if constraints == "baumgarte" else (0.0, 0.0)
     y0 = np.concatenate([np.asarray(q0, dtype=np.float64).reshape(N_Q),

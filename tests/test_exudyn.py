@@ -339,6 +339,16 @@ def test_the_scenarios_fall_limit_stops_the_run(disc):
     assert abs(abs(tr.q[-1, 3]) - 0.5) < 1e-9
 
 
+@pytest.mark.parametrize("fall", ["0.5", 0.0, float("inf"), True])
+def test_a_fall_limit_that_is_not_a_positive_angle_is_refused_before_the_run(disc, fall):
+    # the same one-line refusal as the reference's solvers (text was a float() traceback,
+    # inf or True were accepted)
+    with pytest.raises(ValueError) as err:
+        load_engine("exudyn", disc, build="tree", step=H).simulate(
+            SCENARIOS["stability-psid0"], fall_limit=fall)
+    assert str(err.value) == f"fall_limit must be a positive angle in rad; got {fall!r}"
+
+
 def test_jacobian_every_step_converges_newton_faster_to_the_same_run():
     """jacobian='per-step' recomputes Newton's Jacobian at every step: on the benchmark
     bicycle Newton then converges in far fewer iterations (a Jacobian kept across steps gives

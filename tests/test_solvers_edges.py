@@ -384,6 +384,9 @@ def test_a_fall_is_located_on_the_side_it_happens(model):
 @pytest.mark.parametrize("bad, message", [
     (dict(fall_limit=float("nan")), r"^fall_limit must be a positive angle in rad; got nan$"),
     (dict(fall_limit=-0.1), r"^fall_limit must be a positive angle in rad; got -0\.1$"),
+    (dict(fall_limit=np.inf), r"^fall_limit must be a positive angle in rad; got inf$"),
+    (dict(fall_limit="1.4"), r"^fall_limit must be a positive angle in rad; got '1\.4'$"),
+    (dict(fall_limit=True), r"^fall_limit must be a positive angle in rad; got True$"),
     (dict(constraints="exact"), r"^constraints must be one of \('baumgarte', 'projection', "
                                 r"'none'\); got 'exact'$"),
     (dict(t_eval=[0.0]), r"^t_eval must be a strictly increasing 1-D grid of at least 2 "

@@ -67,7 +67,7 @@ from scipy.optimize import brentq
 from reference_model import Model
 from reference_model.model import torque_array
 from reference_model.scenarios import Scenario, initial_state, torque_input
-from reference_model.solvers import THETA, Trajectory
+from reference_model.solvers import THETA, Trajectory, checked_fall_limit
 
 from ..base import Engine, EngineError, EngineUsageError
 from ..facts import Costs, FixedStep, RunSetup
@@ -482,7 +482,7 @@ class ExudynEngine(Engine):
         ``settings['ignored_options']``). A step that does not divide the scenario's sampling
         interval is an `EngineUsageError`, raised before anything runs."""
         wall0 = time.perf_counter()
-        fall_limit = float(options.pop("fall_limit", scenario.fall_limit))
+        fall_limit = options.pop("fall_limit", scenario.fall_limit)
         t_end = options.pop("t_end", None)
         every_step = bool(options.pop("every_step", False))
         stop_at_fall = bool(options.pop("stop_at_fall", True))
@@ -491,8 +491,7 @@ class ExudynEngine(Engine):
         ignored = {k: options.pop(k) for k in _REFERENCE_ONLY if k in options}
         if options:
             raise TypeError(f"ExudynEngine.simulate got unknown option(s): {', '.join(options)}")
-        if not fall_limit > 0:
-            raise ValueError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
+        fall_limit = checked_fall_limit(fall_limit)
         if scenario.kind != "forward":
             raise ValueError(f"scenario {scenario.name!r} is an inverse scenario; Exudyn runs only "
                              "forward scenarios")
