@@ -14,12 +14,19 @@ settings.load_profile("ci")
 
 
 def pytest_configure(config):
-    """In mutmut's stats run only, credit each shared fixture's work to every test using it
-    (tests/mutation_credit.py: otherwise its first test alone gets it)."""
+    """Under mutmut only: in its stats run, credit each shared fixture's work to every test
+    using it (tests/mutation_credit.py: otherwise its first test alone gets it) and record each
+    test's seconds; in a mutant's run, run the cheapest test files first
+    (tests/mutation_order.py)."""
     import os
-    if os.environ.get("MUTANT_UNDER_TEST") == "stats":
+    mutant = os.environ.get("MUTANT_UNDER_TEST")
+    if not mutant:
+        return
+    if mutant == "stats":
         from mutation_credit import register
         register(config)
+    from mutation_order import register as register_order
+    register_order(config, mutant)
 
 # the conformance suite's general bicycle: every inertia entry distinct, unequal wheels, an
 # off-axis fork CoM (comparisons/conformance/models.py)

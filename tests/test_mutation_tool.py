@@ -233,3 +233,64 @@ def test_a_shared_fixtures_work_is_credited_to_every_test_that_uses_it(pytester)
                         "test_second": {"model.solve"},
                         "test_through_another": {"model.solve", "model.own"},
                         "test_unrelated": {"judge.unrelated"}}
+
+
+def test_a_mutants_tests_run_cheapest_file_first_each_file_whole_and_in_order():
+    """The order is worked out by hand: a.py's tests took 3 s in all, b.py's 0.5 s, c.py has a
+    test never measured (last, as does a file never measured); each file's tests stay together
+    in their own order, and the ids mutmut gives with its ``mutants/`` prefix match too."""
+    from mutation_order import file_order
+
+    seconds = {"tests/a.py::t1": 1.0, "tests/a.py::t2": 2.0, "tests/b.py::t1": 0.5,
+               "mutants/tests/c.py::t1": 0.0}
+    given = ["tests/a.py::t2", "tests/c.py::t1", "tests/b.py::t1", "tests/a.py::t1",
+             "tests/c.py::t2", "tests/d.py::t1"]
+    assert file_order(given, seconds) == [
+        "tests/b.py::t1", "tests/a.py::t2", "tests/a.py::t1", "tests/c.py::t1", "tests/c.py::t2",
+        "tests/d.py::t1"]
+    assert file_order([], seconds) == []
+
+
+def test_the_stats_run_records_seconds_and_a_mutants_run_reads_them(pytester):
+    """End to end through pytest: the stats half writes each test's seconds (a 0.2 s sleep
+    in the slow file's fixture counts for its test), the mutant half then runs the quick file
+    first although pytest collects the slow one first; the forced-fail run keeps pytest's."""
+    from mutation_order import SECONDS_FILE, register
+
+    pytester.makepyfile(
+        test_a_slow="""
+            import time, pytest
+            @pytest.fixture
+            def build():
+                time.sleep(0.2)
+            def test_slow(build):
+                pass
+        """,
+        test_b_quick="""
+            def test_quick():
+                pass
+        """)
+    order: list[str] = []
+
+    class Seen:
+        def pytest_runtest_logstart(self, nodeid, location):
+            order.append(nodeid.split("::")[1])
+
+    class Register:
+        def __init__(self, mutant):
+            self.mutant = mutant
+
+        def pytest_configure(self, config):
+            register(config, self.mutant, pytester.path)
+
+    pytester.inline_run("-p", "no:cacheprovider", plugins=[Register("stats"), Seen()])
+    assert order == ["test_slow", "test_quick"]                       # pytest's own order
+    seconds = __import__("json").loads((pytester.path / SECONDS_FILE).read_text())
+    assert seconds["test_a_slow.py::test_slow"] >= 0.2 > seconds["test_b_quick.py::test_quick"]
+    order.clear()
+    pytester.inline_run("-p", "no:cacheprovider",
+                        plugins=[Register("engines.batching.x_batched__mutmut_3"), Seen()])
+    assert order == ["test_quick", "test_slow"]
+    order.clear()
+    pytester.inline_run("-p", "no:cacheprovider", plugins=[Register("fail"), Seen()])
+    assert order == ["test_slow", "test_quick"]
