@@ -51,4 +51,4 @@ class ReferenceEngine(Engine):
         """The exact linearization's (`reference_model.linearize`: complex-step derivatives of
         the reduced equations), (n, 4)."""
         import numpy as np
-        return self.model.eigenvalues(np.atleast_1d(np.asarray(speeds, dtype=float)))
+        return self.model.eigenvalues(np.atleast_1d(speeds))     # it checks and converts them

@@ -93,3 +93,27 @@ def test_the_fork_axis_contact_is_a_declared_limitation_naming_engine_and_model(
     engine = SimpleNamespace(name="mine", capabilities=frozenset({"simulate"}),
                              model=SimpleNamespace(name="thesis-disc"))
     assert refuse_fork_axis_contact(engine) is None
+
+
+def test_the_step_the_refusal_suggests_is_accepted_even_on_a_long_run():
+    # the fix is printed to 10 significant digits: 0.003333333333 is 3.3e-13 s short of
+    # 0.01/3, 1e-10 relative (within the 1e-9 allowance); over a 100 s run its 30000 steps
+    # end 1e-8 s early, within 1e-9 x 100 s
+    assert steps_per_sample(0.003333333333, 0.01, 1.0, "MuJoCo", "timestep") == 3
+    assert steps_per_sample(0.003333333333, 0.01, 100.0, "MuJoCo", "timestep") == 3
+
+
+def test_a_step_off_by_a_part_in_1e8_is_refused():
+    # 0.0033333333 (8 digits) misses 0.01/3 by 3.3e-11 s: its 3 steps miss the sample by
+    # 1e-10 s, 1e-8 of the interval, above the 1e-9 allowance (a run of one interval, so that
+    # the run's own check, 1e-9 s on runs up to 1 s, does not refuse it first)
+    with pytest.raises(EngineUsageError, match="must divide the output interval"):
+        steps_per_sample(0.0033333333, 0.01, 0.01, "MuJoCo", "timestep")
+    with pytest.raises(EngineUsageError, match="must divide the output interval"):
+        steps_per_sample(0.0033333333, 0.01, 1.0, "MuJoCo", "timestep")
+
+
+def test_a_step_that_fits_the_run_but_not_the_interval_is_refused():
+    # 0.003 s x 10 = 0.03 s, the whole run, but 0.01 s is 3.33 of its steps: samples missed
+    with pytest.raises(EngineUsageError, match="must divide the output interval"):
+        steps_per_sample(0.003, 0.01, 0.03, "MuJoCo", "timestep")
