@@ -33,3 +33,13 @@ def test_an_unknown_name_is_refused_naming_every_choice():
         get_scenario("zig-zag")
     assert isinstance(err.value, UnknownScenarioError)
     assert str(err.value) == ("unknown scenario 'zig-zag'; choose one of: " + ", ".join(INDEX))
+
+
+def test_any_other_missing_name_is_pythons_own_attribute_error():
+    """The package's lazy SCENARIOS (PEP 562) must leave every other name to Python's rule:
+    the message a module without the hook gives (written here as Python words it)."""
+    import reference_model.scenarios as pkg
+    with pytest.raises(AttributeError) as err:
+        pkg.SCENARIO
+    assert str(err.value) == "module 'reference_model.scenarios' has no attribute 'SCENARIO'"
+    assert not hasattr(pkg, "scenarios_by_name")
