@@ -13,6 +13,7 @@ import io
 import os
 import signal
 import sys
+import threading
 
 import pytest
 
@@ -34,6 +35,12 @@ def defaults():
     for s, h in saved.items():
         signal.signal(s, h)
     signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+
+def _send(signum) -> None:
+    """The signal to this thread (not to the process: under pytest-xdist another thread could
+    take it, and a blocked signal would not wait in this thread's pending set)."""
+    signal.pthread_kill(threading.get_ident(), signum)
 
 
 def _in_child(body) -> tuple[int, str]:
@@ -60,7 +67,7 @@ def test_the_first_sigterm_raises_terminated_and_restore_puts_the_defaults_back(
         assert previous == {signal.SIGINT: signal.default_int_handler,
                             signal.SIGTERM: signal.SIG_DFL}
         with pytest.raises(Terminated) as err:
-            os.kill(os.getpid(), signal.SIGTERM)
+            _send(signal.SIGTERM)
             os.sched_yield()                      # the handler runs here at the latest
         assert str(err.value) == "terminated (SIGTERM)"
         assert isinstance(err.value, KeyboardInterrupt)      # never caught by except Exception
@@ -77,7 +84,7 @@ def test_the_first_ctrl_c_is_a_keyboard_interrupt_not_terminated(defaults):
     previous = install_handlers("prog")
     try:
         with pytest.raises(KeyboardInterrupt) as err:
-            os.kill(os.getpid(), signal.SIGINT)
+            _send(signal.SIGINT)
             os.sched_yield()
         assert not isinstance(err.value, Terminated)
     finally:
@@ -115,10 +122,10 @@ def test_a_second_signal_during_the_unwind_exits_at_once_with_one_line(signum, s
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
         install_handlers("prog")
         try:
-            os.kill(os.getpid(), signum)
+            _send(signum)
             os.sched_yield()
         except KeyboardInterrupt:                 # the unwind: a second signal arrives
-            os.kill(os.getpid(), signum)
+            _send(signum)
             os.sched_yield()
         os._exit(3)                               # not reached when the second one exits
     code, err = _in_child(body)
@@ -129,7 +136,7 @@ def test_terminating_turns_sigterm_into_terminated_inside_the_block_only(default
     with pytest.raises(Terminated):
         with terminating():
             assert signal.getsignal(signal.SIGTERM) is raise_terminated
-            os.kill(os.getpid(), signal.SIGTERM)
+            _send(signal.SIGTERM)
             os.sched_yield()
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
 
@@ -138,7 +145,7 @@ def test_terminating_leaves_a_callers_own_handler(defaults):
     seen = []
     signal.signal(signal.SIGTERM, lambda s, f: seen.append(s))
     with terminating():
-        os.kill(os.getpid(), signal.SIGTERM)
+        _send(signal.SIGTERM)
         os.sched_yield()
     assert seen == [signal.SIGTERM]
 
@@ -147,7 +154,7 @@ def test_a_signal_sent_inside_blocked_waits_until_the_block_ends(defaults):
     seen = []
     signal.signal(signal.SIGTERM, lambda s, f: seen.append(s))
     with blocked():
-        os.kill(os.getpid(), signal.SIGTERM)
+        _send(signal.SIGTERM)
         assert signal.SIGTERM in signal.sigpending() and seen == []
     os.sched_yield()
     assert seen == [signal.SIGTERM]
