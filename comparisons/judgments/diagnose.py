@@ -676,7 +676,7 @@ class Diagnosis:
     def describe(self) -> str:
         """A short readable table and the verdict."""
         loc = self.localization
-        width = max([10] + [len(c.engine) for c in loc.checks])
+        width = max([10] + [len(c.engine) for c in loc.checks + loc.solve_checks])
         against = "engines built from the same file" if self.against is None else self.against
         lines = [f"diagnose {self.model} against {against} "
                  f"(engines: {', '.join(self.engines)}; {self.n_states} states)", "",

@@ -1,0 +1,146 @@
+"""What `bicycle-xval diagnose` prints and writes (`Diagnosis.describe`, ``--json``), on
+diagnoses built by hand here, so that every number, entry and cause in the expected text is
+one this file chose: the table's columns (term, engine, max error to one digit, tolerance,
+verdict, worst entries), the legend of the rows taken a second way, the compared quantities,
+the localized cause with its fitted change, the best candidates and each term's own best cause
+when nothing is localized, the differences declared against another file, the engines not
+run and the verdict (docs/report.md, "Diagnose"); and the JSON's keys and values."""
+
+from __future__ import annotations
+
+from comparisons.judgments.diagnose import Diagnosis, Explanation, Localization
+from comparisons.judgments.term_checks import TermCheck
+from comparisons.judgments.terms import TermComparison
+
+M_BAD = TermCheck("pinocchio", "M", 3.2e-3, 1.1e-2, 1e-9, False, 4,
+                  ("M[theta, theta]", "M[theta, gamma]"))
+QV_BAD = TermCheck("pinocchio", "Qv", 5.0e-4, 2.0e-3, 1e-9, False, 7, ("Qv[psi]",))
+QGRAV_F = TermCheck("pinocchio", "Qgrav", 2.0e-12, 1.0e-12, 1e-9, True, 0, ("Qgrav[theta]",), "F")
+DDQ = TermCheck("exudyn-tree", "ddq", 1.0e-13, 1.0e-13, 1e-8, True, 2, ("ddq[gamma]",), "solve")
+M_OK = TermCheck("pinocchio", "M", 1.0e-15, 1.0e-15, 1e-9, True, 1, ("M[psi, psi]",))
+M_IN_ID = TermCheck("pinocchio", "M", 1.0e-15, 1.0e-15, 1e-9, True, 1, ("M[psi, psi]",), "ID")
+MASS = TermComparison("mass_matrix", ("reference", "pinocchio"), 3.2e-3, 1.1e-2, 1e-9, False, 4,
+                      "M[theta, theta]", 24)
+GRAV = TermComparison("gravity", ("reference", "pinocchio"), 1.0e-12, 1.0e-12, 1e-9, True, 0,
+                      "Qgrav[theta]", 24)
+MASS_OK = TermComparison("mass_matrix", ("reference", "pinocchio"), 1.0e-15, 1.0e-15, 1e-9, True,
+                         1, "M[psi, psi]", 24)
+
+I3XX = Explanation(causes=("I3xx",), estimates=(-1.5,), explained=1.0, body=3,
+                   runner_up=("m3", 0.2), model_values=(20.213,), labels=("I3xx",),
+                   kinds=("parameter",), units=("kg*m^2",),
+                   candidates=(("I3xx", "I3xx", 1.0, ()), ("m3", "m3", 0.2, ())))
+NEITHER = Explanation(causes=("I3xx",), estimates=(-0.75,), explained=0.5, body=3,
+                      runner_up=("m3", 0.2), model_values=(20.213,), labels=("I3xx",),
+                      kinds=("parameter",), units=("kg*m^2",),
+                      candidates=(("I3xx", "I3xx", 0.5, ("Qv",)), ("m3", "m3", 0.2, ()),
+                                  ("cv", "cv", 0.1, ("M",))),
+                      unexplained=("Qv",),
+                      per_term=(("M", "I3xx", 0.99), ("Qv", "cv", 0.98)))
+
+
+def test_a_localized_mass_fault_is_the_table_the_quantities_the_cause_and_the_verdict():
+    """The engine column is as wide as the longest engine name of every row, the solve rows'
+    too (it was the term rows' alone: 'exudyn-tree' on a ddq solve row pushed its columns out)."""
+    d = Diagnosis("mine.toml", None, ("pinocchio", "exudyn-tree"), 24,
+                  Localization((MASS, GRAV), (M_BAD, QGRAV_F), I3XX, (DDQ,)),
+                  not_run=(("mujoco", "the thesis's fork-axis contact"),))
+    assert d.describe().split("\n") == [
+        "diagnose mine.toml against engines built from the same file (engines: pinocchio, "
+        "exudyn-tree; 24 states)",
+        "",
+        "term       engine      max error tolerance  verdict  worst entries",
+        "M          pinocchio     3.2e-03     1e-09  DIFFERS  M[theta, theta], M[theta, gamma]",
+        "Qgrav in F pinocchio     2.0e-12     1e-09  ok       Qgrav[theta]",
+        "ddq solve  exudyn-tree   1.0e-13     1e-08  ok       ddq[gamma]",
+        "  'in F': the term taken out of generalized_forces (F = Qv + Qgrav + Qaero + S T), the "
+        "other row from gravity() / inverse_dynamics()",
+        "  'ddq solve': forward_acceleration against the constrained solve of the engine's own M, "
+        "F, D and dD dq",
+        "",
+        "compared quantities (tolerances.toml): 1 of 2 within tolerance; failing: mass_matrix vs "
+        "pinocchio 3.2e-03 > 1e-09 at M[theta, theta]",
+        "localized: M via I3xx (body 3 frame+rider)",
+        "  I3xx (body 3 frame+rider) explains 100.00% of the difference: dI3xx = -1.5 kg*m^2 "
+        "(model 20.213, engines' fit 18.713 kg*m^2); next best single cause m3 (20.0%)",
+        "compared: engines built from mine.toml against the reference built from mine.toml; to "
+        "see how it differs from another bicycle use --against NAME",
+        "not run on this model: mujoco (the thesis's fork-axis contact)",
+        "verdict: DIFFERS",
+    ]
+
+
+def test_no_single_cause_lists_the_entries_the_candidates_and_each_terms_own_cause():
+    declared = (("m3", 77.391, 80.0), ("m2", 2.612, 2.0), ("m4", 1.725, 4.0), ("m5", 2.612, 3.0),
+                ("R_rear", 0.32, 0.3), ("R_front", 0.32, 0.35), ("contact", "thesis", "disc"))
+    d = Diagnosis("mine.toml", "shared/benchmark.toml", ("pinocchio",), 24,
+                  Localization((MASS,), (M_BAD, QV_BAD, M_IN_ID), NEITHER), declared=declared)
+    lines = d.describe().split("\n")
+    assert lines[0] == ("diagnose mine.toml against shared/benchmark.toml (engines: pinocchio; "
+                        "24 states)")
+    assert lines[2] == "term       engine     max error tolerance  verdict  worst entries"
+    assert lines[5] == "M in ID    pinocchio    1.0e-15     1e-09  ok       M[psi, psi]"
+    assert lines[6] == ("  'M in ID': M taken out of inverse_dynamics (column k: ID(q, 0, e_k) - "
+                        "ID(q, 0, 0)), the other row from mass_matrix()")
+    assert lines[8:] == [
+        "compared quantities (tolerances.toml): 0 of 1 within tolerance; failing: mass_matrix vs "
+        "pinocchio 3.2e-03 > 1e-09 at M[theta, theta]",
+        "no single cause explains it: M, Qv differ(s) at M[theta, theta], M[theta, gamma], "
+        "Qv[psi]",
+        "  best candidates (share of the difference each explains alone, 90% needed): I3xx 50.0% "
+        "(leaves Qv unexplained), m3 20.0%, cv 10.0% (leaves M unexplained)",
+        "  term by term (more than one mistake?): M: I3xx 99.0%; Qv: cv 98.0%",
+        "your file differs from shared/benchmark.toml in: m3: benchmark 80, yours 77.391 kg; "
+        "m2: benchmark 2, yours 2.612 kg; m4: benchmark 4, yours 1.725 kg; m5: benchmark 3, "
+        "yours 2.612 kg; R_rear: benchmark 0.3, yours 0.32 m; R_front: benchmark 0.35, yours "
+        "0.32 m and 1 more (see --json)",
+        "verdict: DIFFERS",
+    ]
+
+
+def test_an_agreeing_file_says_it_is_interpreted_consistently():
+    d = Diagnosis("mine.toml", None, ("pinocchio",), 24, Localization((MASS_OK,), (M_OK,), None))
+    lines = d.describe().split("\n")
+    assert lines[-3:] == [
+        "compared quantities (tolerances.toml): 1 of 1 within tolerance",
+        "compared: engines built from mine.toml against the reference built from mine.toml: the "
+        "file is interpreted consistently; to see how it differs from another bicycle use "
+        "--against NAME",
+        "verdict: everything agrees"]
+    assert not any(line.startswith("  '") for line in lines)     # no second-way rows: no legend
+
+
+def test_the_json_of_a_localized_fault():
+    d = Diagnosis("mine.toml", None, ("pinocchio",), 24,
+                  Localization((MASS,), (M_BAD,), I3XX), declared=(("m3", 77.391, 80.0),),
+                  not_run=(("mujoco", "why"),))
+    assert d.to_dict() == {
+        "model": "mine.toml", "against": None, "engines": ["pinocchio"], "n_states": 24,
+        "agrees": False, "localized_to": "M via I3xx (body 3 frame+rider)", "localized": True,
+        "terms": [{"engine": "pinocchio", "term": "M", "max_error": 3.2e-3, "max_abs_error": 1.1e-2,
+                   "tolerance": 1e-9, "passed": False, "worst_state": 4,
+                   "entries": ["M[theta, theta]", "M[theta, gamma]"], "source": ""}],
+        "comparisons": [{"quantity": "mass_matrix", "engines": ["reference", "pinocchio"],
+                         "max_error": 3.2e-3, "tolerance": 1e-9, "passed": False,
+                         "worst_entry": "M[theta, theta]"}],
+        "explanation": {
+            "causes": ["I3xx"], "estimates": [-1.5], "explained": 1.0, "body": 3,
+            "runner_up": ["m3", 0.2], "model_values": [20.213], "labels": ["I3xx"],
+            "localized": True, "unexplained": [], "per_term": [],
+            "candidates": [{"cause": "I3xx", "label": "I3xx", "explained": 1.0, "unexplained": []},
+                           {"cause": "m3", "label": "m3", "explained": 0.2, "unexplained": []}]},
+        "declared_differences": [["m3", 77.391, 80.0]],
+        "not_run": [{"engine": "mujoco", "reason": "why"}],
+    }
+
+
+def test_the_json_of_an_explanation_that_localizes_nothing():
+    e = NEITHER.to_dict()
+    assert e["localized"] is False and e["unexplained"] == ["Qv"]
+    assert e["per_term"] == [{"term": "M", "label": "I3xx", "explained": 0.99},
+                             {"term": "Qv", "label": "cv", "explained": 0.98}]
+    assert e["candidates"][2] == {"cause": "cv", "label": "cv", "explained": 0.1,
+                                  "unexplained": ["M"]}
+    agreeing = Diagnosis("f", None, (), 1, Localization((MASS_OK,), (M_OK,), None)).to_dict()
+    assert agreeing["localized_to"] is None and agreeing["explanation"] is None
+    assert agreeing["agrees"] is True and agreeing["localized"] is False
