@@ -8,6 +8,10 @@ run and the verdict (docs/report.md, "Diagnose"); and the JSON's keys and values
 
 from __future__ import annotations
 
+import dataclasses
+
+import pytest
+
 from comparisons.judgments.diagnose import Diagnosis, Explanation, Localization
 from comparisons.judgments.term_checks import TermCheck
 from comparisons.judgments.terms import TermComparison
@@ -144,3 +148,91 @@ def test_the_json_of_an_explanation_that_localizes_nothing():
     agreeing = Diagnosis("f", None, (), 1, Localization((MASS_OK,), (M_OK,), None)).to_dict()
     assert agreeing["localized_to"] is None and agreeing["explanation"] is None
     assert agreeing["agrees"] is True and agreeing["localized"] is False
+
+
+def _one(cause, est, value, kind, unit, label, body=None, explained=1.0, candidates=()):
+    return Explanation(causes=(cause,), estimates=(est,), explained=explained, body=body,
+                       model_values=(value,), labels=(label,), kinds=(kind,), units=(unit,),
+                       candidates=candidates)
+
+
+@pytest.mark.parametrize("e, text", [
+    (_one("contact", 1.0, "thesis", "structural", "", "front contact model"),
+     "front contact model (all bodies) explains 100.00% of the difference: engines' front "
+     "contact is the other model (coefficient 1.000; the model under test: 'thesis')"),
+    (_one("gyroscopic", 0.998, "without", "structural", "", "gyroscopic terms w x (I w)"),
+     "gyroscopic terms w x (I w) (all bodies) explains 100.00% of the difference: the model "
+     "under test lacks the gyroscopic terms the engines have (coefficient 0.998)"),
+    (_one("gyroscopic", 1.0, "with", "structural", "", "gyroscopic terms w x (I w)"),
+     "gyroscopic terms w x (I w) (all bodies) explains 100.00% of the difference: the engines "
+     "lack the gyroscopic terms the model under test has (coefficient 1.000)"),
+    (_one("sign:Qgrav[F]", 1.0, None, "structural", "", "sign of Qgrav flipped in F"),
+     "sign of Qgrav flipped in F explains 100.00% of the difference: undoing it removes that "
+     "share (the whole mistake, no fitted size)"),
+    (_one("m3@Qgrav", 0.5, 77.391, "term-parameter", "kg", "m3 in Qgrav", body=3),
+     "m3 in Qgrav (body 3 frame+rider) explains 100.00% of the difference: dm3 = +0.5 kg in "
+     "Qgrav only (model 77.391, that term's fit 77.891 kg)"),
+    (_one("xa@D", -0.01, 0.90109, "term-parameter", "m", "xa in D", body=3),
+     "xa in D (body 3 frame+rider) explains 100.00% of the difference: dxa = -0.01 m in D only "
+     "(model 0.90109, that term's fit 0.89109 m): D and dD dq were built with different xa"),
+    (_one("z5@dD dq", 0.02, -0.40779, "term-parameter", "m", "z5 in dD dq", body=4),
+     "z5 in dD dq (body 4 fork/handlebar) explains 100.00% of the difference: dz5 = +0.02 m in "
+     "dD dq only (model -0.40779, that term's fit -0.38779 m): D and dD dq were built with "
+     "different z5"),
+    (_one("table1:lam", 0.01, 0.314159, "table1", "rad", "lam (Table 1)"),
+     "lam (Table 1) (all bodies) explains 100.00% of the difference: dlam = +0.01 rad in Table 1 "
+     "(model built from lam = 0.314159, engines' fit 0.324159 rad)"),
+    (_one("cv", 0.2, 0.8, "parameter", "kg/m", "cv", body=3, explained=0.95),
+     "cv (body 3 frame+rider) explains 95.00% of the difference: dcv = +0.2 kg/m (model 0.8, "
+     "engines' fit 1 kg/m); it leaves 5% of the difference, more than a linearization or "
+     "round-off leaves: a near cause, perhaps not the exact one"),
+    (_one("m2", 0.1, 2.612, "parameter", "kg", "m2", body=2,
+          candidates=(("m2", "m2", 1.0, ()), ("R_rear", "R_rear", 1.0 - 5e-7, ()))),
+     "m2 (body 2 rear wheel) explains 100.00% of the difference: dm2 = +0.1 kg (model 2.612, "
+     "engines' fit 2.712 kg); R_rear explains it as well: the compared terms cannot tell the two "
+     "apart, so check both"),
+    (_one("m2", 0.1, 2.612, "parameter", "kg", "m2", body=2,
+          candidates=(("m2", "m2", 1.0, ()), ("R_rear", "R_rear", 1.0, ()),
+                      ("g", "g", 1.0, ()), ("m3", "m3", 0.5, ()))),
+     "m2 (body 2 rear wheel) explains 100.00% of the difference: dm2 = +0.1 kg (model 2.612, "
+     "engines' fit 2.712 kg); R_rear and g explain it as well: the compared terms cannot tell "
+     "these apart, so check each"),
+], ids=["contact", "gyroscopic-without", "gyroscopic-with", "structural", "term-parameter",
+        "D-and-dD-dq", "dD-dq", "table1", "near-cause", "a-tie", "two-ties"])
+def test_each_kind_of_cause_is_worded_as_the_report_guide_has_it(e, text):
+    assert e.describe() == text
+
+
+def test_two_parameters_traded_for_each_other_are_called_swapped():
+    """x3 and z3 swapped: the fit moves each onto the other's value (dx3 = z3 - x3 = -dz3)."""
+    x3, z3 = 0.26047, 0.94687
+    pair = Explanation(causes=("x3", "z3"), estimates=(z3 - x3, x3 - z3), explained=1.0, body=3,
+                       model_values=(x3, z3), labels=("x3", "z3"),
+                       kinds=("parameter", "parameter"), units=("m", "m"))
+    assert pair.describe() == (
+        "x3 + z3 (body 3 frame+rider) explains 100.00% of the difference: dx3 = +0.6864 m (model "
+        "0.26047, engines' fit 0.94687 m); dz3 = -0.6864 m (model 0.94687, engines' fit 0.26047 "
+        "m); looks like x3 and z3 swapped")
+    moved = dataclasses.replace(pair, estimates=(z3 - x3, 0.5 * (x3 - z3)))     # not a trade
+    assert "swapped" not in moved.describe()
+    apart = dataclasses.replace(pair, estimates=(0.3, -0.3))     # a trade, not onto each other
+    assert "swapped" not in apart.describe()
+    mixed = dataclasses.replace(pair, causes=("x3", "m3"), labels=("x3", "m3"),
+                                units=("m", "kg"))              # a length and a mass: never
+    assert "swapped" not in mixed.describe()
+
+
+def test_best_candidates_with_none_and_a_localization_without_a_cause():
+    assert dataclasses.replace(NEITHER, candidates=()).best_candidates() == "none"
+    assert NEITHER.best_candidates(1) == "I3xx 50.0% (leaves Qv unexplained)"
+    loc = Localization((MASS,), (M_BAD,), None)
+    assert loc.describe() == "M differ(s); no cause found"
+    loc = Localization((MASS,), (M_BAD, QV_BAD), NEITHER)
+    assert loc.describe() == ("M, Qv differ(s); no single cause explains it (best: I3xx 50.0% "
+                              "(leaves Qv unexplained), m3 20.0%)")
+    assert Localization((MASS_OK,), (M_OK,), None).describe() == "everything agrees"
+    partly = dataclasses.replace(I3XX, explained=0.95)
+    assert Localization((MASS,), (M_BAD,), partly).describe() == (
+        "M via I3xx (body 3 frame+rider), partly: it explains 95% (more than one cause?)")
+    only_mass = Localization((MASS,), (), None)
+    assert only_mass.describe() == "a compared quantity differ(s); no cause found"
