@@ -236,3 +236,65 @@ def test_best_candidates_with_none_and_a_localization_without_a_cause():
         "M via I3xx (body 3 frame+rider), partly: it explains 95% (more than one cause?)")
     only_mass = Localization((MASS,), (), None)
     assert only_mass.describe() == "a compared quantity differ(s); no cause found"
+
+
+def test_kinds_and_units_default_from_the_causes_themselves():
+    """An explanation made without kinds or units (a caller's own): a structural cause is
+    worded as one, a parameter gets its unit from the parameter table (I3xx in kg*m^2), and
+    a runner-up that is no candidate is named by its readable label."""
+    e = Explanation(causes=("contact",), estimates=(1.0,), explained=1.0, body=None,
+                    model_values=("disc",), runner_up=("gyroscopic", 0.3))
+    assert e.describe() == (
+        "front contact model (all bodies) explains 100.00% of the difference: engines' front "
+        "contact is the other model (coefficient 1.000; the model under test: 'disc'); next best "
+        "single cause gyroscopic terms w x (I w) (30.0%)")
+    e = Explanation(causes=("I3xx",), estimates=(0.5,), explained=1.0, body=3,
+                    model_values=(20.213,))
+    assert e.describe() == ("I3xx (body 3 frame+rider) explains 100.00% of the difference: "
+                            "dI3xx = +0.5 kg*m^2 (model 20.213, engines' fit 20.713 kg*m^2)")
+
+
+def test_a_runner_up_among_the_candidates_is_named_by_its_candidates_label():
+    e = dataclasses.replace(I3XX, runner_up=("table1:lam", 0.25),
+                            candidates=(("I3xx", "I3xx", 1.0, ()),
+                                        ("table1:lam", "lam (Table 1)", 0.25, ())))
+    assert e.describe().endswith("; next best single cause lam (Table 1) (25.0%)")
+    small = dataclasses.replace(I3XX, runner_up=("m3", 0.004))   # below half a per cent
+    assert "next best" not in small.describe()
+
+
+def test_what_is_printed_when_only_a_compared_quantity_fails_and_nothing_explains_it():
+    """Every term agrees but a compared quantity fails (no term row to name), no explanation:
+    the line names 'a compared quantity' and 'no entry', the candidates 'none'; two failing
+    quantities are listed apart; exactly six declared differences need no '... more'."""
+    grav_bad = TermComparison("gravity", ("reference", "pinocchio"), 2.0e-3, 1.0e-3, 1e-9, False,
+                              3, "Qgrav[theta]", 24)
+    declared = tuple((n, 1.0, 2.0) for n in ("m2", "m3", "m4", "m5", "R_rear", "R_front"))
+    d = Diagnosis("mine.toml", "their.toml", ("pinocchio",), 24,
+                  Localization((MASS, grav_bad), (M_OK,), None), declared=declared)
+    lines = d.describe().split("\n")
+    assert lines[5] == ("compared quantities (tolerances.toml): 0 of 2 within tolerance; failing: "
+                        "mass_matrix vs pinocchio 3.2e-03 > 1e-09 at M[theta, theta]; gravity vs "
+                        "pinocchio 2.0e-03 > 1e-09 at Qgrav[theta]")
+    assert lines[6:9] == [
+        "no single cause explains it: a compared quantity differ(s) at M[theta, theta], "
+        "Qgrav[theta]",
+        "  best candidates (share of the difference each explains alone, 90% needed): none",
+        "your file differs from their.toml in: m2: their 2, yours 1 kg; m3: their 2, yours 1 kg; "
+        "m4: their 2, yours 1 kg; m5: their 2, yours 1 kg; R_rear: their 2, yours 1 m; R_front: "
+        "their 2, yours 1 m"]
+    assert Localization((), (), None).describe() == "everything agrees"
+
+
+def test_at_most_six_differing_entries_and_one_terms_own_cause_is_not_a_breakdown():
+    many = TermCheck("pinocchio", "M", 1e-3, 1e-3, 1e-9, False, 0,
+                     tuple(f"M[theta, {c}]" for c in ("xc", "yc", "phi", "theta", "psi", "beta",
+                                                      "gamma")))
+    one_term = dataclasses.replace(NEITHER, per_term=(("M", "I3xx", 0.99),))
+    d = Diagnosis("mine.toml", None, ("pinocchio",), 24,
+                  Localization((MASS,), (many,), one_term))
+    lines = d.describe().split("\n")
+    line = next(x for x in lines if x.startswith("no single cause"))
+    assert line == ("no single cause explains it: M differ(s) at M[theta, xc], M[theta, yc], "
+                    "M[theta, phi], M[theta, theta], M[theta, psi], M[theta, beta]")
+    assert not any("term by term" in x for x in lines)
