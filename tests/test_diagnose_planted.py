@@ -225,3 +225,23 @@ def test_a_near_cause_is_said_to_be_near():
     e = loc.explanation
     assert e.causes == ("cv",) and 1 - 1e-2 < e.explained < 1 - 1e-6
     assert "a near cause, perhaps not the exact one" in e.describe()
+
+
+#: the line a user reads for each structural mistake of the forward solve and of M's symmetry,
+#: as docs/engines.md describes them (the cause ids alone were checked above)
+LABELS = {"MassMatrixUpper": "M not symmetric: its lower triangle is wrong (M with its upper "
+                             "triangle mirrored agrees)",
+          "MassMatrixLower": "M not symmetric: its upper triangle is wrong (M with its lower "
+                             "triangle mirrored agrees)",
+          "UnconstrainedSolve": "forward_acceleration solves M ddq = F without the constraint "
+                                "rows (D ddq = -dD dq left out)",
+          "SolveBiasSign": "forward_acceleration solves with D ddq = +dD dq (the constraint "
+                           "bias's sign flipped in the solve)"}
+
+
+@pytest.mark.parametrize("name", list(LABELS))
+def test_a_structural_mistake_is_named_in_the_users_words(diagnosed, name):
+    engine = next(cls for cls in PLANTED if cls.__name__ == name)
+    loc = diagnosed[engine]
+    assert loc.explanation.labels == (LABELS[name],)
+    assert loc.describe() == f"{loc.terms[0]} via {LABELS[name]}"

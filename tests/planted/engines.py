@@ -315,6 +315,32 @@ class UnconstrainedSolve(PortedBicycle):
         return np.linalg.solve(self._M(q, s), self._F(s, T)), C
 
 
+class MassMatrixLower(PortedBicycle):
+    """M filled for j <= i only (its lower triangle, the upper right zero): the mirror image
+    of `MassMatrixUpper`'s mistake."""
+
+    name = "planted-m-lower"
+
+    def _M(self, q, s=None):
+        return np.tril(super()._M(q, s))
+
+
+class SolveBiasSign(PortedBicycle):
+    """forward_acceleration solves the constraint rows as D ddq = +dD dq, the bias's sign
+    flipped in the solve alone (constraint_bias itself is right)."""
+
+    name = "planted-solve-bias-sign"
+
+    def _accelerations(self, q, dq, T, a1=0.0, a2=0.0):
+        s = _State(self, q, dq)
+        F = self._Qv(s) + self._Qgrav(s) + self._applied(s, T)
+        D = self._D(q, s)
+        K = np.zeros((N_Q + 5, N_Q + 5))
+        K[:N_Q, :N_Q], K[:N_Q, N_Q:], K[N_Q:, :N_Q] = self._M(q, s), D.T, D
+        ddq = np.linalg.solve(K, np.concatenate([F, +self._bias(s)]))[:N_Q]
+        return ddq, np.zeros(5)
+
+
 class InverseDynamicsSign(PortedBicycle):
     """inverse_dynamics returns -M ddq - Qv - Qgrav: the inertial term's sign flipped there
     alone (mass_matrix and the forward solve are right)."""
@@ -438,7 +464,9 @@ PLANTED = {
     BiasRearRadius: ("benchmark", ("R_front@dD dq",), ("dD dq",)),
     MassMatrixSwapped: ("thesis", ("swap:M:theta,gamma",), ("M",)),
     MassMatrixUpper: ("thesis", ("triangle:M:upper",), ("M",)),
+    MassMatrixLower: ("thesis", ("triangle:M:lower",), ("M",)),
     UnconstrainedSolve: ("thesis", ("solve:unconstrained",), ("ddq",)),
+    SolveBiasSign: ("thesis", ("solve:bias-sign",), ("ddq",)),
     InverseDynamicsSign: ("thesis", ("sign:M[ID]",), ("M",)),
     FrameProductSign: ("thesis", ("I3xz",), ("M", "Qv")),
     WheelInertiasSwapped: ("thesis", ("I2xx", "I2yy"), ("M", "Qv")),
