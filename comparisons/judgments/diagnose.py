@@ -772,7 +772,7 @@ def diagnose(params_file: str | Path, against: str | Path | None = None,
     if not engines or "reference" in engines:
         raise ValueError("engines must name at least one engine other than the reference (the "
                          f"reference is the model under test); got {', '.join(engines) or 'none'}")
-    if isinstance(n_states, bool) or not isinstance(n_states, int) or n_states < 4:
+    if not isinstance(n_states, int) or n_states < 4:     # True and False too: < 4
         raise ValueError(f"n_states must be an integer >= 4; got {n_states!r}")
     model = Model(resolve_model(params_file))
     against_engine = _engine_named(against)

@@ -516,8 +516,8 @@ class CannotRepresent(PortedBicycle):
 
     def __init__(self, model):
         from engines import UnsupportedModel
-        raise UnsupportedModel(f"{self.name} cannot represent model {model.name!r}: declared "
-                               "for the test")
+        raise UnsupportedModel("its bodies cannot take this model's inertias (declared for the "
+                               "test)")
 
 
 class LinearDrag(_Applied):
