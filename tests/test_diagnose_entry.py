@@ -79,3 +79,22 @@ def test_an_engine_that_cannot_represent_the_model_is_left_out_with_its_reason()
                                   "inertias (declared for the test)"),)
     with pytest.raises(UnsupportedModel, match="^engine 'planted-cannot-represent' "):
         diagnose("thesis", engines=(cannot,), n_states=8, tolerances=TOLS)
+
+
+def test_a_model_under_test_without_the_gyroscopic_terms_is_told_so():
+    """The other way round from the planted NoGyroscopic port: the model under test lacks
+    w x (I w) and the engine (Pinocchio) has it, so the fit toggles the model's variant with
+    coefficient +1 and the line says the model lacks them (its value 'without')."""
+    from comparisons.judgments.diagnose import localize
+    from comparisons.judgments.terms import random_states
+    from engines import load_engine
+    from reference_model import Model, load_model
+    thesis = load_model("thesis")
+    lacking = Model(thesis.params, gyroscopic=False)
+    loc = localize(lacking, random_states(8, seed=11), [load_engine("pinocchio", thesis)],
+                   tolerances=TOLS)
+    e = loc.explanation
+    assert loc.localized and e.causes == ("gyroscopic",) and e.model_values == ("without",)
+    assert abs(e.estimates[0] - 1.0) < 1e-9
+    assert ("the model under test lacks the gyroscopic terms the engines have (coefficient "
+            "1.000)") in e.describe()

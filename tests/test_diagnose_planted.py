@@ -52,6 +52,7 @@ ENGINES_FILE = Path(__file__).parent / "planted" / "engines.py"
 #: planted engine -> the fitted change of its cause (engines minus model), from the planted values
 ESTIMATES = {"FrameProductSign": (3.64,), "StandardGravity": (9.80665 - 9.81,),
              "DragCoefficient": (0.08 - 0.8,), "ForkMass": (1.275 - 1.725,),
+             "ForkMassForward": (0.005,),
              "BiasRearRadius": (0.30 - 0.35,), "WheelInertiasSwapped": (0.216 - 0.108, 0.108 - 0.216),
              "WheelbaseTypo": (0.01,)}
 
@@ -88,7 +89,10 @@ def test_planted_bug_is_named(diagnosed, engine):
     assert loc.describe().startswith(f"{', '.join(loc.terms)} via {' + '.join(e.labels)}")
     want = ESTIMATES.get(engine.__name__)
     if want is not None:   # the fit recovers the planted value (w: to its linearization)
-        np.testing.assert_allclose(e.estimates, want, rtol=1e-3 if engine.__name__ == "WheelbaseTypo" else 1e-6)
+        # to their linearization: w (the terms are smooth in it) and dx4 (they hold m4 dx4^2,
+        # whose slope at the thesis's dx4 = 0 is zero: the fit misses it, by O(dx4) relative)
+        linear = engine.__name__ in ("WheelbaseTypo", "ForkMassForward")
+        np.testing.assert_allclose(e.estimates, want, rtol=1e-3 if linear else 1e-6)
 
 
 @pytest.mark.parametrize("engine", list(CONTROLS), ids=lambda c: c.__name__)

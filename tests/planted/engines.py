@@ -399,6 +399,15 @@ class ForkMass(_Typo):
     changes = {"m4": 1.275}
 
 
+class ForkMassForward(_Typo):
+    """The fork's centre of mass put 5 mm ahead of the steering axis (dx4 = 0.005 m for the
+    thesis's 0: a parameter whose value is zero, where diagnose's derivative takes an
+    absolute step)."""
+
+    name = "planted-fork-mass-forward"
+    changes = {"dx4": 0.005}
+
+
 class NoGyroscopic(PortedBicycle):
     """The gyroscopic torques w x (I w) left out of Qv (the example's own option)."""
 
@@ -473,6 +482,7 @@ PLANTED = {
     StandardGravity: ("thesis", ("g",), ("Qgrav",)),
     DragCoefficient: ("thesis", ("cv",), ("Qaero",)),
     ForkMass: ("thesis", ("m4",), ("M", "Qv", "Qgrav")),
+    ForkMassForward: ("thesis", ("dx4",), ("M", "Qv", "Qgrav")),
     NoGyroscopic: ("thesis", ("gyroscopic",), ("Qv",)),
     HeadAngleTwice: ("benchmark", ("table1:lam-deg2rad",), ("M", "Qv", "Qgrav", "D", "dD dq")),
     HeadAngleForTilt: ("benchmark", ("table1:lam-head-angle",), ("M", "Qv", "Qgrav", "D", "dD dq")),
