@@ -87,3 +87,29 @@ def test_the_matcher_sees_a_moved_parameter_and_a_changed_text():
     problems = _match(skeleton, got, p, fronts)
     assert len(problems) == 3, problems
     assert problems[0].startswith("$.bodies[1].com[0]")
+
+
+def test_provenance_values_are_made_plain_json():
+    """What a parameter file carries besides the parameters goes out as JSON's own types:
+    numbers, text, booleans and null as they are, a dataclass (Table 1) and a table as objects
+    with text keys, a numpy number as a float, anything else as its text."""
+    import dataclasses as dc
+    from pathlib import PurePosixPath
+
+    import numpy as np
+
+    from reference_model.exports.description import _plain
+
+    @dc.dataclass
+    class Row:
+        w: float
+        name: str
+
+    for v in (None, "x", True, 3, 2.5):
+        assert _plain(v) is v
+    assert _plain(Row(1.02, "b")) == {"w": 1.02, "name": "b"}
+    nested = _plain({1: np.float64(0.5), "t": {"row": Row(0.3, "c")}})
+    assert nested == {"1": 0.5, "t": {"row": {"w": 0.3, "name": "c"}}}
+    assert type(nested["1"]) is float
+    assert type(_plain(np.float32(0.25))) is float and _plain(np.float32(0.25)) == 0.25
+    assert _plain(PurePosixPath("/a/b.toml")) == "/a/b.toml"
