@@ -86,3 +86,17 @@ def test_the_torques_of_a_named_history_come_from_the_model_asked(thesis, disc):
     assert not np.allclose(own.q[-1], other.q[-1], rtol=0, atol=1e-12)
     again = run_forward(thesis, sc, torques_from=thesis)
     assert np.array_equal(own.q, again.q)
+
+
+def test_the_inverse_run_integrates_beta_unless_asked_to_reproject(disc):
+    """The thesis integrates the dependent coordinates (its beta drifts off [rD]_z = 0 by the
+    integrator's error); reproject=True solves beta from the constraint at every evaluation.
+    The default is the thesis's way: the run is the integrated one, bit for bit."""
+    from reference_model.solvers import inverse_dynamics, inverse_kinematics
+    sc = dataclasses.replace(SCENARIOS["zigzag"], grid=(0.0, 0.01, 101))
+    integrated = inverse_dynamics(disc, inverse_kinematics(disc, sc.motion, sc.t,
+                                                           reproject=False))
+    solved = run_inverse(disc, sc, reproject=True)
+    default = run_inverse(disc, sc)
+    assert np.array_equal(default.motion.q, integrated.motion.q)
+    assert not np.array_equal(solved.motion.q, integrated.motion.q)
