@@ -21,7 +21,8 @@ from scenario_text import FORWARD, write
 
 @pytest.mark.parametrize("text, safe", [("Batavus Browser", "Batavus-Browser"),
                                         ("a/b:c", "a-b-c"), (" -x- ", "x"), ("v1.2_b", "v1.2_b"),
-                                        ("///", "model"), ("", "model")])
+                                        ("///", "model"), ("", "model"),
+                                        ("Xtreme Bike", "Xtreme-Bike")])
 def test_slug(text, safe):
     assert slug(text) == safe
 
@@ -81,6 +82,11 @@ def test_with_models_each_scenario_is_bound_or_listed_as_not_run():
     assert cases[2].scenario is SCENARIOS["benchmark-v4"]
     assert [(s.scenario, s.model) for s in skipped] == [("benchmark-v4", "thesis-disc")]
     assert skipped[0].reason == not_applicable(SCENARIOS["benchmark-v4"])
+    # a scenario on its own model, or one not run, goes on to the next name
+    cases, skipped = build_cases(["benchmark-v4", "zigzag"], (disc, bench), ())
+    assert [c.name for c in cases] == ["zigzag-on-thesis-disc", "benchmark-v4",
+                                       "zigzag-on-benchmark"]
+    assert [s.scenario for s in skipped] == ["benchmark-v4"]
 
 
 def test_a_scenario_file_runs_on_its_own_model_and_on_every_model(tmp_path):
@@ -89,6 +95,8 @@ def test_a_scenario_file_runs_on_its_own_model_and_on_every_model(tmp_path):
     cases, _ = build_cases([], (bench,), (str(f),))
     assert [(c.name, c.model, c.origin) for c in cases] == [
         ("mine", "thesis", str(f)), ("mine-on-benchmark", "benchmark", str(f))]
+    assert [(c.scenario.name, c.scenario.model) for c in cases] == [
+        ("mine", "thesis"), ("mine-on-benchmark", "benchmark")]
     thesis = model_spec("thesis")                          # the file's own model given too
     cases, _ = build_cases([], (thesis,), (str(f),))
     assert [c.name for c in cases] == ["mine"]

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import pytest
 
-from comparisons.stages.runs import (EngineSetup, cost, engine_setups, label_of, setup_of,
-                                     setups_for)
+from comparisons.stages.runs import (EngineSetup, cost, engine_setups, label_of, run_one,
+                                     setup_of, setups_for)
 
 ENGINES = '''
 from engines.base import Engine
@@ -56,6 +56,27 @@ class One(Engine):
         raise NotImplementedError
 
 
+class DiscOnly(Engine):
+    """Models the disc contact alone, and says why in its constructor."""
+    name = "disc-only"
+    capabilities = frozenset({"mass_matrix", "simulate"})
+    contacts = ("disc",)
+
+    def __init__(self, model, step=0.001):
+        from engines import CapabilityError
+        if model.contact != "disc":
+            raise CapabilityError(f"disc-only cannot take the {model.contact}  contact   (step {step})")
+        super().__init__(model)
+
+
+class DiscQuiet(DiscOnly):
+    """Models the disc contact alone, and builds on any model without saying so."""
+    name = "disc-quiet"
+
+    def __init__(self, model, step=0.001):
+        Engine.__init__(self, model)
+
+
 class Neither(Engine):
     """Terms only: no scenario of either kind."""
     name = "neither"
@@ -70,7 +91,7 @@ class Neither(Engine):
 def specs(tmp_path_factory):
     path = tmp_path_factory.mktemp("setups") / "my_engines.py"
     path.write_text(ENGINES, "utf-8")
-    return {n: f"{path}:{n}" for n in ("Two", "Plain", "One", "Neither")}
+    return {n: f"{path}:{n}" for n in ("Two", "Plain", "One", "DiscOnly", "DiscQuiet", "Neither")}
 
 
 def test_label_of_a_name_and_of_a_class_spec():
@@ -123,3 +144,24 @@ def test_costs_follow_the_engines_declaration(specs):
     assert cost(two, "zigzag") == 0.3 and cost(two, "check-on-mine") == 0.3
     assert cost(two, "check-forward") == pytest.approx(2.0 * 6.3)   # 6.3 s simulated
     assert cost(two, "stability-psid5") == pytest.approx(2.0 * 1.2)
+
+
+def test_a_scenario_of_a_kind_the_setup_does_not_run_is_not_run_and_says_why(specs):
+    setup = setup_of(specs["One"])                              # forward runs only
+    run = run_one(setup, "zigzag")
+    assert (run.engine, run.scenario, run.model, run.kind, run.status) == (
+        "One", "zigzag", "thesis", "inverse", "not run")
+    assert run.message == ("One has no constrained inverse dynamics (run_inverse: the rider's "
+                           "torques and the contact forces of a prescribed motion)")
+
+
+def test_an_engine_without_the_models_contact_is_not_run_with_its_own_reason(specs):
+    """The loader refuses the contact before the constructor; the run then asks the
+    constructor itself (with the setup's options) for its CapabilityError, else states it."""
+    own = run_one(EngineSetup("DiscOnly", specs["DiscOnly"], (("step", 0.002),)), "stability-psid0")
+    assert (own.status, own.model) == ("not run", "thesis")
+    assert own.message == "CapabilityError: disc-only cannot take the thesis contact (step 0.002)"
+    plain = run_one(setup_of(specs["DiscQuiet"]), "stability-psid0")
+    assert plain.status == "not run"
+    assert plain.message == ("DiscQuiet models the front contact(s) disc, not 'thesis' of model "
+                             "'thesis'")

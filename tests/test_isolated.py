@@ -30,11 +30,14 @@ from engines.base import Engine
 
 class Fine(Engine):
     name = "fine"
-    capabilities = frozenset({"mass_matrix", "gravity"})
+    capabilities = frozenset({"mass_matrix", "gravity", "constraint_jacobian"})
     contacts = ("thesis",)
 
     def mass_matrix(self, q):
         return self.model.mass_matrix(q) * 2.0
+
+    def constraint_jacobian(self, q):
+        return self.model.constraint_jacobian(q)
 
     def gravity(self, q):
         return self.model.Qgrav(q)
@@ -45,6 +48,27 @@ class Dies(Fine):
 
     def mass_matrix(self, q):
         os._exit(3)
+
+
+class Raises(Fine):
+    name = "raises"
+
+    def mass_matrix(self, q):
+        raise RuntimeError("boom")
+
+
+class DiesBuilding(Fine):
+    name = "dies-building"
+
+    def __init__(self, model):
+        os._exit(4)
+
+
+class HangsBuilding(Fine):
+    name = "hangs-building"
+
+    def __init__(self, model):
+        time.sleep(60)
 
 
 class Hangs(Fine):
@@ -69,13 +93,16 @@ def _remote(spec, cls, model, timeout=5.0):
 
 def test_values_come_back_from_the_worker_and_the_facts_are_the_engines(spec, thesis):
     eng = _remote(spec, "Fine", thesis)
-    assert eng.name == "fine" and eng.capabilities == frozenset({"mass_matrix", "gravity"})
+    assert eng.name == "fine"
+    assert eng.capabilities == frozenset({"mass_matrix", "gravity", "constraint_jacobian"})
     assert eng.contacts == ("thesis",) and eng.run_difference is None
     assert np.array_equal(eng.mass_matrix(Q), 2.0 * thesis.mass_matrix(Q))
     assert np.array_equal(eng.gravity(Q), thesis.Qgrav(Q))
+    assert np.array_equal(eng.constraint_jacobian(Q), thesis.constraint_jacobian(Q))
     with pytest.raises(CapabilityError, match=r"^engine 'fine' cannot compute "
-                                              r"constraint_jacobian; it provides: mass_matrix, gravity$"):
-        eng.constraint_jacobian(Q)
+                                              r"constraint_bias; it provides: mass_matrix, "
+                                              r"gravity, constraint_jacobian$"):
+        eng.constraint_bias(Q, Q)
 
 
 def test_an_engine_that_ends_its_worker_is_gone_and_not_asked_again(spec, thesis):
@@ -124,6 +151,7 @@ def test_one_engines_failure_is_one_failing_row_beside_the_others_rows():
     assert (bad.quantity, bad.scenario, bad.model, list(bad.engines), bad.passed) == (
         "engine call", "zigzag", "thesis", ["bad"], False)
     assert bad.max_error is None and bad.tolerance is None
+    assert bad.extra == {}                  # every field a common one: nothing else written
     assert bad.localized_to == "ValueError: M is not symmetric"
     assert bad.note == "bad failed while its mass matrix was compared"
 
@@ -146,3 +174,22 @@ def test_why_a_scenario_cannot_be_compared():
     assert unjudgeable(_Ref(10, scenario="stability-psid5"), on_mine,
                        {"stability-psid5": 2.0}) == ""
     assert unjudgeable(_Ref(10), SCENARIOS["zigzag"], {}) == ""     # inverse: no horizon needed
+
+
+def test_an_engines_own_runtime_error_is_its_error_not_a_dead_worker(spec, thesis):
+    eng = _remote(spec, "Raises", thesis)
+    with pytest.raises(RuntimeError) as err:
+        eng.mass_matrix(Q)
+    assert type(err.value) is RuntimeError and str(err.value) == "boom"
+    assert eng.broken is None and np.array_equal(eng.gravity(Q), thesis.Qgrav(Q))
+
+
+def test_an_engine_that_dies_or_hangs_while_being_built_is_named_with_its_setup(spec, thesis):
+    with pytest.raises(EngineGone) as err:
+        _remote(spec, "DiesBuilding", thesis)
+    assert str(err.value) == ("engine 'DiesBuilding': __init__: its worker process died (exit "
+                              "status 4)")
+    with pytest.raises(EngineGone) as err:
+        _remote(spec, "HangsBuilding", thesis, timeout=0.5)
+    assert str(err.value) == ("engine 'HangsBuilding': __init__ timed out after 0.5 s (its "
+                              "worker was killed)")

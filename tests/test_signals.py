@@ -133,7 +133,7 @@ def test_a_second_signal_during_the_unwind_exits_at_once_with_one_line(signum, s
 
 
 def test_terminating_turns_sigterm_into_terminated_inside_the_block_only(defaults):
-    with pytest.raises(Terminated):
+    with pytest.raises(Terminated, match=r"^terminated \(SIGTERM\)$"):
         with terminating():
             assert signal.getsignal(signal.SIGTERM) is raise_terminated
             _send(signal.SIGTERM)
