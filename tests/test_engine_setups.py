@@ -144,6 +144,8 @@ def test_costs_follow_the_engines_declaration(specs):
     assert cost(two, "zigzag") == 0.3 and cost(two, "check-on-mine") == 0.3
     assert cost(two, "check-forward") == pytest.approx(2.0 * 6.3)   # 6.3 s simulated
     assert cost(two, "stability-psid5") == pytest.approx(2.0 * 1.2)
+    one = setup_of(specs["One"])                               # Costs' defaults: 1 s per s
+    assert cost(one, "replay") == pytest.approx(6.3) and cost(one, "zigzag") == 0.8
 
 
 def test_a_scenario_of_a_kind_the_setup_does_not_run_is_not_run_and_says_why(specs):
