@@ -108,3 +108,19 @@ def test_two_cases_of_one_name_are_refused_naming_both_origins(tmp_path):
         build_cases(["zigzag"], (), (str(f),))
     assert str(err.value) == (f"two scenarios named 'zigzag' (built-in, {f}); rename one "
                               "(scenario.name in its file)")
+
+
+def test_a_models_warnings_are_carried_to_what_the_run_reports(tmp_path):
+    """A bicycle allowed to break the triangle inequality (I3xx + I3zz < I3yy, [checks]
+    triangle = "warn") carries the loader's warning into the run's model list."""
+    from reference_model import load_model
+    text = Path(NAMED_MODELS["thesis"][0]).read_text("utf-8")
+    line = 'I3zz = { value = 3.205,'
+    assert line in text
+    path = tmp_path / "flat.toml"
+    path.write_text(text.replace(line, 'I3zz = { value = 0.5,') + '\n[checks]\ntriangle = "warn"\n',
+                    "utf-8")
+    warnings = load_model(str(path)).warnings
+    assert warnings and any("triangle" in w for w in warnings)
+    spec = model_spec(str(path))
+    assert spec.warnings == tuple(warnings) and spec.as_dict()["warnings"] == list(warnings)
