@@ -53,6 +53,7 @@ ENGINES_FILE = Path(__file__).parent / "planted" / "engines.py"
 ESTIMATES = {"FrameProductSign": (3.64,), "StandardGravity": (9.80665 - 9.81,),
              "DragCoefficient": (0.08 - 0.8,), "ForkMass": (1.275 - 1.725,),
              "ForkMassForward": (0.005,),
+             "NoGyroscopic": (1.0,),     # a structural cause: 1 = fully the other variant
              "BiasRearRadius": (0.30 - 0.35,), "WheelInertiasSwapped": (0.216 - 0.108, 0.108 - 0.216),
              "WheelbaseTypo": (0.01,)}
 
@@ -249,3 +250,12 @@ def test_a_structural_mistake_is_named_in_the_users_words(diagnosed, name):
     loc = diagnosed[engine]
     assert loc.explanation.labels == (LABELS[name],)
     assert loc.describe() == f"{loc.terms[0]} via {LABELS[name]}"
+
+
+def test_engines_without_the_gyroscopic_terms_are_told_from_a_model_without_them(diagnosed):
+    """NoGyroscopic: the engines lack w x (I w), the model under test has it ('with'), and the
+    line says which side lacks them (tests/test_diagnose_entry.py has the other side)."""
+    e = diagnosed[next(c for c in PLANTED if c.__name__ == "NoGyroscopic")].explanation
+    assert e.model_values == ("with",)
+    assert "the engines lack the gyroscopic terms the model under test has (coefficient 1.000)" \
+        in e.describe()

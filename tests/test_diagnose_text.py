@@ -298,3 +298,30 @@ def test_at_most_six_differing_entries_and_one_terms_own_cause_is_not_a_breakdow
     assert line == ("no single cause explains it: M differ(s) at M[theta, xc], M[theta, yc], "
                     "M[theta, phi], M[theta, theta], M[theta, psi], M[theta, beta]")
     assert not any("term by term" in x for x in lines)
+
+
+def test_near_swaps_a_cause_that_is_no_parameter_and_the_json_flags():
+    x3, z3 = 0.26047, 0.94687
+    d = z3 - x3
+    pair = Explanation(causes=("x3", "z3"), estimates=(d, -d), explained=1.0, body=3,
+                       model_values=(x3, z3), labels=("x3", "z3"),
+                       kinds=("parameter", "parameter"), units=("m", "m"))
+    assert "swapped" in pair.describe()
+    # 6 % of the change left over in the sum, or the fit 0.05 m (7 % of it) off the other's
+    # value: past the 5 % a swap allows
+    assert "swapped" not in dataclasses.replace(pair, estimates=(d, -0.94 * d)).describe()
+    assert "swapped" not in dataclasses.replace(pair, estimates=(d + 0.05, -d - 0.05)).describe()
+    odd = dataclasses.replace(pair, causes=("x3", "gyroscopic"), labels=("x3", "gyroscopic"),
+                              kinds=("parameter", "structural"), units=("m", ""),
+                              model_values=(x3, "with"))
+    assert "swapped" not in odd.describe()            # no unit to compare: never, no error
+    e = Explanation(causes=("I3xx",), estimates=(0.1,), explained=0.5, body=3,
+                    model_values=(20.213,), candidates=(("I3xx", "I3xx", 0.5, ("Qv", "M")),))
+    assert e.to_dict()["runner_up"] is None and e.to_dict()["localized"] is False
+    assert e.best_candidates() == "I3xx 50.0% (leaves Qv, M unexplained)"
+
+
+def test_best_candidates_shows_three_by_default():
+    e = dataclasses.replace(NEITHER, candidates=NEITHER.candidates + (("g", "g", 0.05, ()),))
+    assert e.best_candidates().count("%") == 3 and "g 5.0%" not in e.best_candidates()
+    assert e.best_candidates(4).endswith("g 5.0%")
