@@ -294,3 +294,16 @@ def test_the_stats_run_records_seconds_and_a_mutants_run_reads_them(pytester):
     order.clear()
     pytester.inline_run("-p", "no:cacheprovider", plugins=[Register("fail"), Seen()])
     assert order == ["test_slow", "test_quick"]
+
+
+def test_every_listed_equivalent_is_filed_under_the_module_it_mutates():
+    """A mutant's name starts with its module's dotted path: an entry under another module's
+    table is never matched (seen: 13 of diagnose's entries appended under the stages runs'
+    table), and each entry gives its reason."""
+    root = Path(__file__).resolve().parents[1]
+    listed = tomllib.loads((root / "tests" / "mutation_equivalents.toml").read_text("utf-8"))
+    misfiled = [(module, name) for module, names in listed.items() for name in names
+                if not name.startswith(module.removesuffix(".py").replace("/", ".") + ".x")]
+    assert not misfiled, misfiled
+    assert all(reason.strip() for names in listed.values() for reason in names.values())
+    assert all((root / module).is_file() for module in listed)
