@@ -98,3 +98,19 @@ def test_a_model_under_test_without_the_gyroscopic_terms_is_told_so():
     assert abs(e.estimates[0] - 1.0) < 1e-9
     assert ("the model under test lacks the gyroscopic terms the engines have (coefficient "
             "1.000)") in e.describe()
+
+
+def test_a_bicycle_against_another_bicycle_names_both_and_the_differences():
+    """The result names the file under test and what the engines were built from; the same
+    file gives no 'against' and no declared differences; the states are the seeded ones (the
+    same seed gives the same numbers, another seed others)."""
+    same = diagnose("thesis", engines=("pinocchio",), n_states=8, tolerances=TOLS)
+    assert (same.model, same.against, same.declared, same.not_run) == ("thesis", None, (), ())
+    other = diagnose("thesis", against="thesis-disc", engines=("pinocchio",), n_states=8,
+                     tolerances=TOLS)
+    assert (other.model, other.against) == ("thesis", "thesis-disc")
+    assert other.declared == (("contact", "thesis", "disc"),)       # the only difference
+    again = diagnose("thesis", engines=("pinocchio",), n_states=8, seed=11, tolerances=TOLS)
+    moved = diagnose("thesis", engines=("pinocchio",), n_states=8, seed=5, tolerances=TOLS)
+    worst = lambda d: [c.max_abs_error for c in d.localization.checks]
+    assert worst(again) == worst(same) and worst(moved) != worst(same)
