@@ -58,6 +58,10 @@ def test_a_port_against_another_engine_is_judged_against_it():
     loc = d.localization
     assert loc.localized and loc.explanation.causes == ("sign:Qgrav",)
     assert {c.engines[0] for c in loc.quantities} == {"pinocchio"}   # not the reference
+    cannot = f"{PLANTED}:CannotRepresent"
+    d = diagnose("thesis", against="pinocchio", engines=(cannot, f"{PLANTED}:GravitySign"),
+                 n_states=8, tolerances=TOLS)
+    assert d.declared == () and [e for e, _ in d.not_run] == [cannot]
 
 
 def test_engine_options_reach_the_engine_they_name():
