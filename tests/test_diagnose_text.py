@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from comparisons.judgments.diagnose import Diagnosis, Explanation, Localization
@@ -325,3 +326,28 @@ def test_best_candidates_shows_three_by_default():
     e = dataclasses.replace(NEITHER, candidates=NEITHER.candidates + (("g", "g", 0.05, ()),))
     assert e.best_candidates().count("%") == 3 and "g 5.0%" not in e.best_candidates()
     assert e.best_candidates(4).endswith("g 5.0%")
+
+
+def test_the_share_a_removal_takes_away_worked_by_hand():
+    """_removal: r = (3, 4), |r|^2 = 25; removing (3, 0) leaves (0, 4): 1 - 16/25 = 0.36 of the
+    whole, and per block: the first block (3) wholly, the second (4) not at all, so the least
+    is 0; removing more than r (6, 0) leaves (-3, 4): 0 of the whole, clipped at 0, and the
+    first block 1 - 9/9 = 0; nothing to remove is (0, -inf); no differing block gives 1."""
+    from comparisons.judgments.diagnose import _removal, _share
+    r = np.array([3.0, 4.0])
+    blocks = [((0, 1), "M"), ((1, 2), "Qv")]
+    assert _removal(r, np.array([3.0, 0.0]), blocks) == pytest.approx((0.36, 0.0))
+    assert _removal(r, np.array([3.0, 0.0]), blocks[:1]) == pytest.approx((0.36, 1.0))
+    assert _removal(r, np.array([6.0, 0.0]), blocks[:1]) == pytest.approx((0.0, 0.0))
+    assert _removal(r, np.array([-3.0, 8.0]), []) == (0.0, 1.0)   # worse than nothing: 0
+    assert _removal(r, None, blocks) == (0.0, -np.inf)
+    # _share: (2 x b - x^2 G) / rr: x = b/G is the least-squares fit, b^2/(G rr) removed
+    coef, b, G = np.array([0.5, 2.0, 1.0]), np.array([2.0, 2.0, 1.0]), np.array([4.0, 1.0, 0.0])
+    ok = np.array([True, True, False])
+    assert np.allclose(_share(coef, b, G, 4.0, ok), [0.25, 1.0, 0.0])       # 1/4, (8-4)/4
+    assert np.allclose(_share(coef, b, G, 4.0, ok, clip=False)[:2], [0.25, 1.0])
+    assert _share(coef, b, G, 4.0, ok, clip=False)[2] == -np.inf             # not ok: -inf
+    # clipped to [0, 1] unless asked not to: (2*3*1 - 9*1)/4 = -0.75, (2*2*3 - 4*1)/4 = 2
+    coef, b, G, ok = np.array([3.0, 2.0]), np.array([1.0, 3.0]), np.array([1.0, 1.0]), np.ones(2, bool)
+    assert np.array_equal(_share(coef, b, G, 4.0, ok), [0.0, 1.0])
+    assert np.allclose(_share(coef, b, G, 4.0, ok, clip=False), [-0.75, 2.0])
