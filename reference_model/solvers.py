@@ -18,6 +18,8 @@ forward dynamics.
 
 from __future__ import annotations
 
+import math
+import numbers
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -39,8 +41,8 @@ def checked_fall_limit(fall_limit) -> float:
     """The fall limit (the lean |theta| in rad at which a forward run ends as a fall) as a
     float, or ValueError in one line: a real, finite, positive number (not a bool, not text).
     The one rule every time loop applies (the reference's solvers, the engines' own)."""
-    if not (isinstance(fall_limit, (int, float, np.floating, np.integer))
-            and not isinstance(fall_limit, bool) and np.isfinite(fall_limit) and fall_limit > 0):
+    if not (isinstance(fall_limit, numbers.Real) and not isinstance(fall_limit, bool)
+            and math.isfinite(fall_limit) and fall_limit > 0):
         raise ValueError(f"fall_limit must be a positive angle in rad; got {fall_limit!r}")
     return float(fall_limit)
 

@@ -32,24 +32,18 @@ __all__ = ["SECONDS_FILE", "CheapFilesFirst", "TestSeconds", "file_order"]
 SECONDS_FILE = "mutmut-test-seconds.json"
 
 
-def _file(nodeid: str) -> str:
-    path = nodeid.split("::", 1)[0]
-    return path.removeprefix("mutants/")
-
-
 def file_order(nodeids: list[str], seconds: dict[str, float]) -> list[str]:
     """``nodeids`` grouped by file, the files in increasing total ``seconds`` (a file with a
     test not measured goes last, as does one never measured), each file's ids in their given
     order; ties keep the given order of the files."""
     by_file: dict[str, list[str]] = defaultdict(list)
     for nid in nodeids:
-        by_file[_file(nid)].append(nid)
-    measured = {k.removeprefix("mutants/"): v for k, v in seconds.items()}
+        by_file[_strip(nid).split("::", 1)[0]].append(nid)
+    measured = {_strip(k): v for k, v in seconds.items()}
 
     def cost(f: str) -> float:
-        ids = by_file[f]
-        return (sum(measured[_strip(i)] for i in ids)
-                if all(_strip(i) in measured for i in ids) else float("inf"))
+        times = [measured.get(_strip(i)) for i in by_file[f]]
+        return float("inf") if None in times else sum(times)
 
     files = sorted(by_file, key=cost)          # sorted() is stable: ties keep the given order
     return [nid for f in files for nid in by_file[f]]
