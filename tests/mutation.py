@@ -5,6 +5,7 @@ against its own fast test selection, results kept per module and summed into one
     python tests/mutation.py --all                             # every module not yet measured
     python tests/mutation.py --table                           # the per-module scores so far
     python tests/mutation.py --list                            # the set and each selection
+    python tests/mutation.py --refresh MODULE                  # its survivors against new tests
 
 Why not one ``mutmut run`` over the whole set: mutmut generates every mutant of every module
 before it runs any (33 700 mutants in 109 files: 20 min on the project's 2-core machine) and
@@ -13,10 +14,23 @@ module or test starts it all again. Here each module is mutated in a scratch cop
 (``build/mutation/<module>/``) whose ``[tool.mutmut]`` names only that module and only the
 test files that reach it (``[tool.bicycle-xval.mutation.tests]`` in pyproject.toml; the
 whole selection where no entry matches), so a module of a few hundred mutants takes minutes.
-The result of each module is written to ``build/mutation/results/<module>.json`` with the
-hashes of the module and of its tests: ``--all`` skips the modules whose result is still
-current, so an interrupted ``make mutants`` resumes where it stopped, and ``--table`` marks a
-result whose module or tests changed since as stale.
+The result of each module is written to ``tests/mutation_results/<module>.json`` (committed:
+a module's measurement costs minutes to an hour, and a new machine or a fresh clone starts
+without ``build/``) with the hashes of the module and of its tests: ``--all`` skips the
+modules whose result is still current, so an interrupted ``make mutants`` resumes where it
+stopped, and ``--table`` marks a result whose module or tests changed since as stale.
+``--refresh`` brings a result whose module is unchanged up to date with tests written after
+it: its survivors are run against the module's current selection (as the rerun below), which
+is all that can change when tests are only added.
+
+mutmut runs each mutant in a process forked from a fork server that has imported pytest and
+collected the tests but run none (``process_isolation = "forkserver"``), not from its main
+process, which has run the whole selection once for its stats: a child forked from there
+inherits the event loop and threads that the tests' in-process Dask cluster left behind, and
+hangs. Measured on ``comparisons/stages/sweep_deadline.py``: forked from the main process,
+every mutant timed out, renaming a thread included, and would have counted as killed; from the
+fork server, 23 of 55 were killed, 32 survived and none timed out. Timeouts are shown apart in
+the table for that reason.
 
 Surviving mutants that cannot change any behaviour a user or caller relies on are listed, each
 with its reason, in ``tests/mutation_equivalents.toml``; the table counts them apart from the
@@ -47,10 +61,14 @@ import time
 import tomllib
 from pathlib import Path
 
-__all__ = ["Result", "confirm", "equivalents", "exclusive", "main", "measure", "module_set", "selection_for", "survivors",
-           "has_functions", "table", "text_only"]
+__all__ = ["Result", "confirm", "equivalents", "exclusive", "main", "measure", "module_set",
+           "refresh", "selection_for", "survivors", "has_functions", "table", "text_only"]
 
 ROOT = Path(__file__).resolve().parent.parent
+#: the committed measurements, one JSON file per module
+RESULTS = ROOT / "tests" / "mutation_results"
+#: what mutmut prints when it stops because no selected test executes any mutated function
+NOTHING_REACHED = "could not find any test case for any mutant"
 #: what the scratch copy leaves out: the virtualenv, git, generated reports and caches
 COPY_IGNORE = (".venv", ".git", "build", "mutants", "reports", ".cache", "__pycache__",
                ".pytest_cache", ".hypothesis", "*.egg-info", "mutants.log")
@@ -77,6 +95,9 @@ class Result:
     #: mutants mutmut let survive that the module's whole selection kills when run on the
     #: mutant alone (`confirm`): counted as killed
     killed_on_rerun: tuple[str, ...] = ()
+    #: when the survivors were last run against tests written after the measurement
+    #: (`refresh`); empty if never
+    refreshed: str = ""
 
     @property
     def tried(self) -> int:
@@ -153,11 +174,11 @@ def slug(module: str) -> str:
     return module.removesuffix(".py").replace("/", ".")
 
 
-def _sha(paths) -> str:
+def _sha(paths, root: Path = ROOT) -> str:
     h = hashlib.sha256()
     for p in paths:
         h.update(p.encode())
-        f = ROOT / p.split("::")[0]
+        f = root / p.split("::")[0]
         h.update(f.read_bytes() if f.is_file() else b"-")
     return h.hexdigest()
 
@@ -220,28 +241,34 @@ def _mutmut(venv_bin: Path, scratch: Path, *args: str, log=None) -> subprocess.C
 
 
 def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mutation",
-            timeout_multiplier: float | None = None, rerun: bool = True,
-            progress=print) -> Result:
-    """Mutate ``module`` alone in a scratch copy and run its selection; the result is written
-    to ``out/results/<slug>.json`` and returned."""
-    if module not in module_set():
+            results: Path = RESULTS, timeout_multiplier: float | None = None,
+            rerun: bool = True, progress=print, root: Path = ROOT,
+            venv_bin: Path | None = None) -> Result:
+    """Mutate ``module`` alone in a scratch copy under ``out`` and run its selection; the
+    result is written to ``results/<slug>.json`` and returned."""
+    if module not in module_set(root):
         raise SystemExit(f"error: {module} is not in [tool.mutmut]'s set (see --list); give a "
                          "path relative to the repository, e.g. comparisons/judgments/rows.py")
-    tests = selection_for(module)
+    tests = selection_for(module, root)
     scratch = out / slug(module)
     if scratch.exists():
         shutil.rmtree(scratch)
-    shutil.copytree(ROOT, scratch, ignore=shutil.ignore_patterns(*COPY_IGNORE), symlinks=True)
+    shutil.copytree(root, scratch, ignore=shutil.ignore_patterns(*COPY_IGNORE), symlinks=True)
     (scratch / "pyproject.toml").write_text(
-        _narrowed((ROOT / "pyproject.toml").read_text("utf-8"), module, tests, timeout_multiplier),
+        _narrowed((root / "pyproject.toml").read_text("utf-8"), module, tests, timeout_multiplier),
         "utf-8")
-    venv_bin = Path(sys.executable).parent
+    venv_bin = venv_bin or Path(sys.executable).parent
     progress(f"{module}: mutating in {scratch} against {len(tests)} test selection(s) ...")
     t0 = time.perf_counter()
     with open(scratch / "mutants.log", "w") as log:
         run = _mutmut(venv_bin, scratch, "run", "--max-children", str(children), log=log)
-    if run.returncode != 0:
-        tail = (scratch / "mutants.log").read_text(errors="replace").splitlines()[-15:]
+    log_text = (scratch / "mutants.log").read_text(errors="replace")
+    # mutmut stops (exit 1) when no selected test reaches any mutant: the module's every
+    # mutant is then 'not reached', a result like any other (its code runs only in the slow
+    # tests or in other processes), not a failure that ends a run of several modules
+    unreached = run.returncode != 0 and NOTHING_REACHED in log_text
+    if run.returncode != 0 and not unreached:
+        tail = log_text.splitlines()[-15:]
         raise SystemExit(f"error: mutmut failed on {module} (exit {run.returncode}); the end of "
                          f"{scratch / 'mutants.log'}:\n" + "\n".join(tail))
     seconds = time.perf_counter() - t0
@@ -251,6 +278,8 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
         name, sep, what = line.strip().rpartition(": ")
         if sep and name:
             status[name] = what.strip()
+    if unreached:
+        status = dict.fromkeys(status, "no tests")
     count = lambda s: sum(1 for v in status.values() if v == s)
     survivors = sorted(n for n, v in status.items() if v == "survived")
     rerun_killed = (confirm(module, survivors, tests, scratch, venv_bin, progress, children)
@@ -259,7 +288,7 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
     diffs = _diffs(venv_bin, scratch, survivors)
     version = subprocess.run([str(venv_bin / "mutmut"), "--version"], capture_output=True,
                              text=True).stdout.split()[-1]
-    res = Result(module=module, module_sha=_sha([module]), tests_sha=_sha(tests),
+    res = Result(module=module, module_sha=_sha([module], root), tests_sha=_sha(tests, root),
                  tests=tuple(tests),
                  killed=count("killed") + count("timeout") + len(rerun_killed),
                  timeouts=count("timeout"),
@@ -267,9 +296,8 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
                  suspicious=count("suspicious"), not_reached=count("no tests"),
                  seconds=round(time.perf_counter() - t0, 1), diffs=diffs,
                  killed_on_rerun=tuple(rerun_killed),
-                 when=datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-                 mutmut=version)
-    _save(res, out)
+                 when=_now(), mutmut=version)
+    _save(res, results)
     progress(f"{module}: {res.killed}/{res.tried} killed ({_pct(res.killed, res.tried)}), "
              f"{len(res.survived)} survived ({len(res.text_only)} of them in a text only), "
              f"{res.not_reached} not reached, {seconds:.0f} s"
@@ -351,11 +379,56 @@ def confirm(module: str, names, tests: list[str], scratch: Path, venv_bin: Path,
     return tuple(killed)
 
 
-def survivors(module: str, out: Path = ROOT / "build" / "mutation") -> str:
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+
+
+def refresh(module: str, *, out: Path = ROOT / "build" / "mutation", results: Path = RESULTS,
+            children: int = 2, progress=print, root: Path = ROOT,
+            venv_bin: Path | None = None) -> Result:
+    """``module``'s result brought up to date with tests written after it: its survivors are
+    run against the module's current selection (`confirm`, in the scratch copy the
+    measurement left under ``out``), those killed move to ``killed_on_rerun``, and the result
+    takes the selection's current hash. Sound when the module is unchanged and tests were only
+    added since (a test removed or weakened could let a killed mutant live: measure again)."""
+    res = load_result(module, results)
+    if res is None:
+        raise SystemExit(f"error: {module} has not been measured; run "
+                         f"python tests/mutation.py {module}")
+    if res.module_sha != _sha([module], root):
+        raise SystemExit(f"error: {module} changed since it was measured; measure it again "
+                         f"(python tests/mutation.py {module})")
+    scratch = out / slug(module)
+    if not (scratch / "mutants").is_dir():
+        raise SystemExit(f"error: the scratch copy {scratch} is gone; measure {module} again")
+    tests = selection_for(module, root)
+    # the scratch copy takes the tests as they are now: tests/ whole (its helpers and data
+    # too), and the selection's files elsewhere (the conformance suite)
+    shutil.copytree(root / "tests", scratch / "tests", dirs_exist_ok=True,
+                    ignore=shutil.ignore_patterns(*COPY_IGNORE))
+    for t in tests:
+        if not t.startswith("-") and not t.startswith("tests/"):
+            src, dst = root / t.split("::")[0], scratch / t.split("::")[0]
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(src, dst)
+    killed = confirm(module, list(res.survived), tests, scratch,
+                     venv_bin or Path(sys.executable).parent, progress, children)
+    new = dataclasses.replace(
+        res, tests_sha=_sha(tests, root), tests=tuple(tests), killed=res.killed + len(killed),
+        survived=tuple(n for n in res.survived if n not in killed),
+        killed_on_rerun=(*res.killed_on_rerun, *killed), refreshed=_now())
+    _save(new, results)
+    progress(f"{module}: {len(killed)} of {len(res.survived)} survivors killed by the current "
+             f"selection; {new.killed}/{new.tried} killed ({_pct(new.killed, new.tried)})")
+    return new
+
+
+def survivors(module: str, out: Path = ROOT / "build" / "mutation",
+              results: Path = RESULTS) -> str:
     """The surviving mutants of ``module``'s last measurement, each with its change and, if
     listed, the reason it is equivalent (the diffs are read from the scratch copy once and
     kept in the result)."""
-    res = load_result(module, out)
+    res = load_result(module, results)
     if res is None:
         raise SystemExit(f"error: {module} has not been measured; run "
                          f"python tests/mutation.py {module}")
@@ -366,7 +439,7 @@ def survivors(module: str, out: Path = ROOT / "build" / "mutation") -> str:
             raise SystemExit(f"error: the scratch copy {scratch} is gone; measure {module} again")
         res = dataclasses.replace(res, diffs={**res.diffs, **_diffs(Path(sys.executable).parent,
                                                                    scratch, missing)})
-        _save(res, out)
+        _save(res, results)
     eq = equivalents()
     lines = []
     for n in res.survived:
@@ -375,12 +448,12 @@ def survivors(module: str, out: Path = ROOT / "build" / "mutation") -> str:
     return "\n".join(lines) + ("\n" if lines else "")
 
 
-def _result_path(module: str, out: Path) -> Path:
-    return out / "results" / f"{slug(module)}.json"
+def _result_path(module: str, results: Path) -> Path:
+    return results / f"{slug(module)}.json"
 
 
-def _save(res: Result, out: Path) -> Path:
-    path = _result_path(res.module, out)
+def _save(res: Result, results: Path) -> Path:
+    path = _result_path(res.module, results)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(dataclasses.asdict(res), indent=1) + "\n")
@@ -392,8 +465,8 @@ def _pct(a: int, b: int) -> str:
     return f"{100 * a / b:.1f} %" if b else "-"
 
 
-def load_result(module: str, out: Path = ROOT / "build" / "mutation") -> Result | None:
-    path = _result_path(module, out)
+def load_result(module: str, results: Path = RESULTS) -> Result | None:
+    path = _result_path(module, results)
     if not path.is_file():
         return None
     d = json.loads(path.read_text())
@@ -422,33 +495,39 @@ def equivalents(root: Path = ROOT) -> dict[str, str]:
     return out
 
 
-def table(out: Path = ROOT / "build" / "mutation") -> str:
+def table(results: Path = RESULTS) -> str:
     """The per-module scores as a markdown table, with the sum over the measured modules.
-    'text only': survivors that change only a string literal's contents (`text_only`);
-    'equivalent': survivors listed in tests/mutation_equivalents.toml; 'left': the others."""
+    'timeouts': killed by running out of time, not by a failing assertion (counted as
+    killed, as mutmut counts them; shown apart because a run environment that hangs makes
+    every mutant one); 'text only': survivors that change only a string literal's contents
+    (`text_only`); 'equivalent': survivors listed in tests/mutation_equivalents.toml;
+    'left': the others."""
     eq = equivalents()
-    rows = ["| module | tried | killed | % | survived | text only | equivalent | left | "
-            "not reached | measured |", "|---|---|---|---|---|---|---|---|---|---|"]
-    tot = dict.fromkeys(("tried", "killed", "survived", "text", "eq", "left", "unreached"), 0)
+    rows = ["| module | tried | killed | % | timeouts | survived | text only | equivalent | left | "
+            "not reached | measured |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    tot = dict.fromkeys(("tried", "killed", "timeouts", "survived", "text", "eq", "left",
+                         "unreached"), 0)
     missing, empty = [], []
     for module in module_set():
-        res = load_result(module, out)
+        res = load_result(module, results)
         if res is None:
             (missing if has_functions(module) else empty).append(module)
             continue
         n_eq = sum(1 for n in res.survived if n in eq)
         n_text = len(res.text_only)
         left = sum(1 for n in res.survived if n not in eq)
+        when = res.when + (f", refreshed {res.refreshed}" if res.refreshed else "")
         rows.append(f"| `{module}` | {res.tried} | {res.killed} | {_pct(res.killed, res.tried)} "
-                    f"| {len(res.survived)} | {n_text} | {n_eq} | {left} "
-                    f"| {res.not_reached} | {res.when}{'' if current(res) else ' (stale)'} |")
-        for k, v in (("tried", res.tried), ("killed", res.killed),
+                    f"| {res.timeouts} | {len(res.survived)} | {n_text} | {n_eq} | {left} "
+                    f"| {res.not_reached} | {when}{'' if current(res) else ' (stale)'} |")
+        for k, v in (("tried", res.tried), ("killed", res.killed), ("timeouts", res.timeouts),
                      ("survived", len(res.survived)), ("text", n_text), ("eq", n_eq),
                      ("left", left), ("unreached", res.not_reached)):
             tot[k] += v
     rows.append(f"| **{len(module_set()) - len(missing) - len(empty)} measured** | {tot['tried']} | "
-                f"{tot['killed']} | {_pct(tot['killed'], tot['tried'])} | {tot['survived']} | "
-                f"{tot['text']} | {tot['eq']} | {tot['left']} | {tot['unreached']} | |")
+                f"{tot['killed']} | {_pct(tot['killed'], tot['tried'])} | {tot['timeouts']} | "
+                f"{tot['survived']} | {tot['text']} | {tot['eq']} | {tot['left']} | "
+                f"{tot['unreached']} | |")
     text = "\n".join(rows) + "\n"
     if missing:
         text += f"\nNot measured yet ({len(missing)}): " + ", ".join(f"`{m}`" for m in missing) + "\n"
@@ -470,8 +549,13 @@ def main(argv=None) -> int:
     ap.add_argument("--children", type=int, default=2, help="mutmut worker processes [2]")
     ap.add_argument("--no-rerun", action="store_true",
                     help="do not rerun mutmut's survivors against the module's whole selection")
+    ap.add_argument("--refresh", metavar="MODULE", action="append", default=[],
+                    help="run MODULE's survivors against its current selection (tests written "
+                         "after its measurement); needs its scratch copy")
     ap.add_argument("--out", type=Path, default=ROOT / "build" / "mutation",
-                    help="scratch copies and results [build/mutation]")
+                    help="scratch copies [build/mutation]")
+    ap.add_argument("--results", type=Path, default=RESULTS,
+                    help="the measurements, one JSON file a module [tests/mutation_results]")
     a = ap.parse_args(argv)
     if a.children < 1:
         ap.error(f"--children must be at least 1; got {a.children}")
@@ -480,21 +564,24 @@ def main(argv=None) -> int:
             print(m, "<-", " ".join(selection_for(m)))
         return 0
     if a.survivors:
-        print(survivors(a.survivors, a.out), end="")
+        print(survivors(a.survivors, a.out, a.results), end="")
         return 0
     todo = list(a.modules)
     if a.all:
         todo += [m for m in module_set() if has_functions(m)
-                 and ((r := load_result(m, a.out)) is None or not current(r))]
-    if not todo and not a.table:
-        ap.error("name a module, or give --all, --table or --list")
-    if todo:
+                 and ((r := load_result(m, a.results)) is None or not current(r))]
+    if not todo and not a.table and not a.refresh:
+        ap.error("name a module, or give --all, --table, --refresh or --list")
+    if todo or a.refresh:
         with exclusive(a.out):
+            for m in a.refresh:
+                refresh(m, out=a.out, results=a.results, children=a.children)
             for i, m in enumerate(dict.fromkeys(todo), 1):
                 print(f"[{i}/{len(todo)}]", end=" ", flush=True)
-                measure(m, children=a.children, out=a.out, rerun=not a.no_rerun)
-    if a.table or todo:
-        print(table(a.out), end="")
+                measure(m, children=a.children, out=a.out, results=a.results,
+                        rerun=not a.no_rerun)
+    if a.table or todo or a.refresh:
+        print(table(a.results), end="")
     return 0
 
 

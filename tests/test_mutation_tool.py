@@ -59,8 +59,11 @@ def test_the_scratch_configuration_narrows_only_the_mutmut_table():
     assert mm["pytest_add_cli_args_test_selection"] == ["tests/test_a.py"]
     assert mm["timeout_multiplier"] == 3.0
     # mutmut's other keys and every other table are kept as they were
-    for k in ("source_paths", "also_copy", "pytest_add_cli_args"):
+    for k in ("source_paths", "also_copy", "pytest_add_cli_args", "process_isolation"):
         assert mm[k] == before["tool"]["mutmut"][k]
+    # the mutants' pytest forked from a fork server, not from the process that ran the stats
+    # (the sweep's in-process Dask cluster left a loop there that hangs a forked child)
+    assert mm["process_isolation"] == "forkserver"
     assert out["project"] == before["project"]
     assert out["tool"]["bicycle-xval"] == before["tool"]["bicycle-xval"]
     assert out["tool"]["pytest"] == before["tool"]["pytest"]
@@ -307,3 +310,136 @@ def test_every_listed_equivalent_is_filed_under_the_module_it_mutates():
     assert not misfiled, misfiled
     assert all(reason.strip() for names in listed.values() for reason in names.values())
     assert all((root / module).is_file() for module in listed)
+
+
+# -- the committed results: table and refresh --------------------------------------------
+
+def _result(module, root, **kw):
+    base = dict(module=module, module_sha=mutation._sha([module], root),
+                tests_sha="old", tests=("tests/test_mod.py",), killed=5, timeouts=2,
+                survived=(), suspicious=0, not_reached=1, seconds=1.0,
+                when="2026-12-06 01:00 UTC", mutmut="3.8.1")
+    return mutation.Result(**{**base, **kw})
+
+
+def test_the_table_shows_timeouts_apart_and_sums_them(tmp_path):
+    """A measured module's row gives its timeouts beside its killed (they count as killed) and
+    the sum row adds them; a module without a result is listed as not measured. The figures
+    are the result's own, written here."""
+    module = "engines/runs.py"
+    mutation._save(_result(module, ROOT, killed=7, timeouts=3, survived=("a", "b"),
+                           diffs={"a": ['-    x = "a"', '+    x = "XXaXX"']}), tmp_path)
+    text = mutation.table(tmp_path)
+    head = text.splitlines()[0]
+    assert "| timeouts |" in head
+    row = next(ln for ln in text.splitlines() if ln.startswith(f"| `{module}`"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    # module, tried, killed, %, timeouts, survived, text only, equivalent, left, not reached
+    assert cells[1:10] == ["9", "7", "77.8 %", "3", "2", "1", "0", "2", "1"]
+    total = next(ln for ln in text.splitlines() if ln.startswith("| **1 measured**"))
+    assert [c.strip() for c in total.strip("|").split("|")][1:5] == ["9", "7", "77.8 %", "3"]
+    assert "Not measured yet" in text and "`engines/base.py`" in text
+
+
+def _refresh_tree(tmp_path):
+    """A project of one module with one survivor the new test kills and one it does not, its
+    scratch copy left by a measurement holding the old test (which kills neither)."""
+    root = tmp_path / "root"
+    (root / "tests").mkdir(parents=True)
+    (root / "pyproject.toml").write_text(
+        '[tool.mutmut]\nonly_mutate = ["mod.py"]\npytest_add_cli_args_test_selection = []\n'
+        '[tool.bicycle-xval.mutation.tests]\n"mod.py" = ["tests/test_mod.py"]\n')
+    original = "def add(a, b):\n    return a + b\n"
+    (root / "mod.py").write_text(original)
+    (root / "tests" / "test_mod.py").write_text(
+        "from mod import add\n\n\ndef test_add():\n    assert add(2, 3) == 5\n")
+    scratch = tmp_path / "out" / "mod"
+    (scratch / "mutants").mkdir(parents=True)
+    (scratch / "tests").mkdir()
+    (scratch / "mod.py").write_text(original)
+    (scratch / "tests" / "test_mod.py").write_text("def test_nothing():\n    pass\n")
+    names = ["mod.x_add__mutmut_1", "mod.x_add__mutmut_2"]
+    bin_ = _fake_venv(tmp_path, {names[0]: "def add(a, b):\n    return a - b\n",
+                                 names[1]: "def add(a, b):\n    return b + a\n"})
+    return root, scratch, names, bin_
+
+
+def test_refresh_runs_the_survivors_against_the_tests_written_since(tmp_path):
+    """Of two survivors the new test kills one (a - b; b + a is equivalent): it moves to
+    killed_on_rerun, the killed count grows by one, and the result takes the selection's
+    current hash so the table no longer calls it stale. Planted: the scratch copy's old test
+    kept (nothing killed)."""
+    root, scratch, names, bin_ = _refresh_tree(tmp_path)
+    results = tmp_path / "results"
+    mutation._save(_result("mod.py", root, survived=tuple(names)), results)
+    new = mutation.refresh("mod.py", out=tmp_path / "out", results=results, root=root,
+                           venv_bin=bin_, children=1, progress=lambda *a: None)
+    assert new.survived == (names[1],)
+    assert new.killed_on_rerun == (names[0],)
+    assert (new.killed, new.tried) == (6, 7)
+    assert new.tests_sha == mutation._sha(["tests/test_mod.py"], root) and new.refreshed
+    assert mutation.load_result("mod.py", results) == new
+    assert (scratch / "mod.py").read_text() == (root / "mod.py").read_text()
+
+
+def test_refresh_refuses_what_it_cannot_bring_up_to_date(tmp_path):
+    """Not measured, the module changed since (its other mutants may differ), or the scratch
+    copy gone: each one line saying to measure."""
+    import pytest
+    root, scratch, names, bin_ = _refresh_tree(tmp_path)
+    results = tmp_path / "results"
+    kw = dict(out=tmp_path / "out", results=results, root=root, venv_bin=bin_,
+              progress=lambda *a: None)
+    with pytest.raises(SystemExit, match=r"^error: mod.py has not been measured; run "):
+        mutation.refresh("mod.py", **kw)
+    mutation._save(_result("mod.py", root, survived=tuple(names), module_sha="x"), results)
+    with pytest.raises(SystemExit, match=r"^error: mod.py changed since it was measured"):
+        mutation.refresh("mod.py", **kw)
+    mutation._save(_result("mod.py", root, survived=tuple(names)), results)
+    __import__("shutil").rmtree(scratch / "mutants")
+    with pytest.raises(SystemExit, match=r"^error: the scratch copy .* is gone; measure mod.py"):
+        mutation.refresh("mod.py", **kw)
+
+
+def test_a_module_no_fast_test_reaches_is_a_result_not_a_failure(tmp_path):
+    """mutmut stops with exit 1 when no selected test runs any mutated function (the FMU's
+    co-simulation runs only in slow tests): the module is recorded with its every mutant 'not
+    reached' and none tried, and a run of several modules goes on. A mutmut failure of any
+    other kind still stops with the end of its log."""
+    import stat
+    import sys
+
+    import pytest
+    root = tmp_path / "root"
+    (root / "tests").mkdir(parents=True)
+    (root / "pyproject.toml").write_text(
+        '[tool.mutmut]\nonly_mutate = ["mod.py"]\npytest_add_cli_args_test_selection = []\n'
+        '[tool.bicycle-xval.mutation.tests]\n"mod.py" = ["tests/test_mod.py"]\n')
+    (root / "mod.py").write_text("def add(a, b):\n    return a + b\n")
+    (root / "tests" / "test_mod.py").write_text("def test_other():\n    pass\n")
+    bin_ = tmp_path / "bin"
+    bin_.mkdir()
+
+    def fake_mutmut(run_says: str) -> None:
+        (bin_ / "mutmut").write_text(
+            f"#!{sys.executable}\nimport sys\n"
+            "if sys.argv[1] == 'run':\n"
+            f"    print({run_says!r})\n    sys.exit(1)\n"
+            "if sys.argv[1] == 'results':\n"
+            "    print('    mod.x_add__mutmut_1: not checked')\n"
+            "    print('    mod.x_add__mutmut_2: not checked')\n"
+            "if sys.argv[1] == '--version':\n    print('mutmut, version 3.8.1')\n")
+        (bin_ / "mutmut").chmod((bin_ / "mutmut").stat().st_mode | stat.S_IXUSR)
+
+    fake_mutmut("Stopping early, because we could not find any test case for any mutant. It "
+                "seems that the selected tests do not cover any code that we mutated.")
+    kw = dict(out=tmp_path / "out", results=tmp_path / "results", root=root, venv_bin=bin_,
+              progress=lambda *a: None)
+    res = mutation.measure("mod.py", **kw)
+    assert (res.tried, res.killed, res.not_reached, res.survived) == (0, 0, 2, ())
+    assert mutation.load_result("mod.py", tmp_path / "results") == res
+
+    fake_mutmut("Traceback (most recent call last):\nImportError: no module named x")
+    with pytest.raises(SystemExit, match=r"(?s)^error: mutmut failed on mod.py \(exit 1\).*"
+                                         r"ImportError: no module named x"):
+        mutation.measure("mod.py", **kw)
