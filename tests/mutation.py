@@ -67,6 +67,8 @@ __all__ = ["Result", "confirm", "equivalents", "exclusive", "main", "measure", "
 ROOT = Path(__file__).resolve().parent.parent
 #: the committed measurements, one JSON file per module
 RESULTS = ROOT / "tests" / "mutation_results"
+#: the earlier rounds' readings of modules with no committed result (tried and killed only)
+READINGS = ROOT / "tests" / "mutation_readings.toml"
 #: what mutmut prints when it stops because no selected test executes any mutated function
 NOTHING_REACHED = "could not find any test case for any mutant"
 #: what the scratch copy leaves out: the virtualenv, git, generated reports and caches
@@ -495,8 +497,18 @@ def equivalents(root: Path = ROOT) -> dict[str, str]:
     return out
 
 
-def table(results: Path = RESULTS) -> str:
-    """The per-module scores as a markdown table, with the sum over the measured modules.
+def readings(path: Path = READINGS) -> dict[str, dict]:
+    """The earlier rounds' readings (``tests/mutation_readings.toml``): module -> its table
+    (tried, killed, round, date, and the flags sweep_tests and stopped)."""
+    if not path.is_file():
+        return {}
+    return tomllib.loads(path.read_text("utf-8"))
+
+
+def table(results: Path = RESULTS, readings_path: Path = READINGS) -> str:
+    """The per-module scores as a markdown table, with the sum over the measured modules: a
+    module's committed result where there is one, else the earlier rounds' reading of it
+    (tried and killed only, marked as a reading), else it is listed as not measured.
     'timeouts': killed by running out of time, not by a failing assertion (counted as
     killed, as mutmut counts them; shown apart because a run environment that hangs makes
     every mutant one); 'text only': survivors that change only a string literal's contents
@@ -507,9 +519,23 @@ def table(results: Path = RESULTS) -> str:
             "not reached | measured |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     tot = dict.fromkeys(("tried", "killed", "timeouts", "survived", "text", "eq", "left",
                          "unreached"), 0)
+    old = readings(readings_path)
+    read = dict.fromkeys(("n", "tried", "killed"), 0)
+    read_rows = []
     missing, empty = [], []
     for module in module_set():
         res = load_result(module, results)
+        if res is None and module in old:
+            r = old[module]
+            flags = "".join([", its selection starts the sweep's Dask tests" if r.get("sweep_tests") else "",
+                             ", stopped before its end" if r.get("stopped") else ""])
+            read_rows.append(f"| `{module}` | {r['tried']} | {r['killed']} | "
+                             f"{_pct(r['killed'], r['tried'])} | ? | {r['tried'] - r['killed']} | "
+                             f"? | ? | ? | ? | reading of the {r['round']} round ({r['date']}){flags} |")
+            read["n"] += 1
+            read["tried"] += r["tried"]
+            read["killed"] += r["killed"]
+            continue
         if res is None:
             (missing if has_functions(module) else empty).append(module)
             continue
@@ -524,10 +550,16 @@ def table(results: Path = RESULTS) -> str:
                      ("survived", len(res.survived)), ("text", n_text), ("eq", n_eq),
                      ("left", left), ("unreached", res.not_reached)):
             tot[k] += v
-    rows.append(f"| **{len(module_set()) - len(missing) - len(empty)} measured** | {tot['tried']} | "
+    n_res = len(module_set()) - len(missing) - len(empty) - read["n"]
+    rows.append(f"| **{n_res} measured** | {tot['tried']} | "
                 f"{tot['killed']} | {_pct(tot['killed'], tot['tried'])} | {tot['timeouts']} | "
                 f"{tot['survived']} | {tot['text']} | {tot['eq']} | {tot['left']} | "
                 f"{tot['unreached']} | |")
+    if read_rows:
+        t, k = tot["tried"] + read["tried"], tot["killed"] + read["killed"]
+        rows += read_rows
+        rows.append(f"| **{n_res + read['n']} measured, {read['n']} of them earlier readings** | "
+                    f"{t} | {k} | {_pct(k, t)} | | | | | | | |")
     text = "\n".join(rows) + "\n"
     if missing:
         text += f"\nNot measured yet ({len(missing)}): " + ", ".join(f"`{m}`" for m in missing) + "\n"

@@ -329,7 +329,7 @@ def test_the_table_shows_timeouts_apart_and_sums_them(tmp_path):
     module = "engines/runs.py"
     mutation._save(_result(module, ROOT, killed=7, timeouts=3, survived=("a", "b"),
                            diffs={"a": ['-    x = "a"', '+    x = "XXaXX"']}), tmp_path)
-    text = mutation.table(tmp_path)
+    text = mutation.table(tmp_path, tmp_path / "no-readings.toml")
     head = text.splitlines()[0]
     assert "| timeouts |" in head
     row = next(ln for ln in text.splitlines() if ln.startswith(f"| `{module}`"))
@@ -338,7 +338,7 @@ def test_the_table_shows_timeouts_apart_and_sums_them(tmp_path):
     assert cells[1:10] == ["9", "7", "77.8 %", "3", "2", "1", "0", "2", "1"]
     total = next(ln for ln in text.splitlines() if ln.startswith("| **1 measured**"))
     assert [c.strip() for c in total.strip("|").split("|")][1:5] == ["9", "7", "77.8 %", "3"]
-    assert "Not measured yet" in text and "`engines/base.py`" in text
+    assert "`engines/base.py`" in text.split("Not measured yet")[1]
 
 
 def _refresh_tree(tmp_path):
@@ -443,3 +443,29 @@ def test_a_module_no_fast_test_reaches_is_a_result_not_a_failure(tmp_path):
     with pytest.raises(SystemExit, match=r"(?s)^error: mutmut failed on mod.py \(exit 1\).*"
                                          r"ImportError: no module named x"):
         mutation.measure("mod.py", **kw)
+
+
+def test_an_earlier_reading_stands_in_for_a_missing_result_and_is_summed_apart(tmp_path):
+    """A module with no committed result but an earlier round's reading gets a row marked as
+    that reading (its flags spelt out), the committed results keep their own sum, and the last
+    row adds both: 7 of 9 and 40 of 50 are 47 of 59 (79.7 %). A committed result wins over a
+    reading of the same module. The figures are written here."""
+    results, path = tmp_path / "results", tmp_path / "readings.toml"
+    mutation._save(_result("engines/runs.py", ROOT, killed=7, timeouts=0, survived=("a", "b")),
+                   results)
+    path.write_text('["engines/base.py"]\ntried = 50\nkilled = 40\nround = "fourth"\n'
+                    'date = "2026-12-02"\nsweep_tests = true\nstopped = true\n'
+                    '["engines/runs.py"]\ntried = 1\nkilled = 0\nround = "third"\n'
+                    'date = "2026-12-02"\n')
+    text = mutation.table(results, path)
+    lines = text.splitlines()
+    row = next(ln for ln in lines if ln.startswith("| `engines/base.py`"))
+    assert row.startswith("| `engines/base.py` | 50 | 40 | 80.0 % |")
+    assert row.endswith("| reading of the fourth round (2026-12-02), its selection starts the "
+                        "sweep's Dask tests, stopped before its end |")
+    runs = [ln for ln in lines if ln.startswith("| `engines/runs.py`")]
+    assert len(runs) == 1 and runs[0].startswith("| `engines/runs.py` | 9 | 7 |")
+    assert any(ln.startswith("| **1 measured** | 9 | 7 | 77.8 % |") for ln in lines)
+    assert any(ln.startswith("| **2 measured, 1 of them earlier readings** | 59 | 47 | 79.7 % |")
+               for ln in lines)
+    assert "`engines/base.py`" not in text.split("Not measured yet")[1]
