@@ -50,10 +50,11 @@ bench: $(STAMP)
 # Mutation testing (not part of `make test`): mutmut, module by module (tests/mutation.py): each
 # module of pyproject.toml's [tool.mutmut] set is mutated alone in a scratch copy under
 # build/mutation/, against its own fast test selection ([tool.bicycle-xval.mutation.tests]),
-# and its result kept in build/mutation/results/. `make mutants` measures every module whose
-# result is missing or stale (module or tests changed), so an interrupted run resumes; the
-# whole set is hours on the 2-core machine (README, "Tests"). MODULE narrows it, e.g.
-# make mutants MODULE=comparisons/judgments/rows.py. `make mutants-table` prints the scores.
+# and its result committed in tests/mutation_results/. `make mutants` measures every module
+# whose result is missing or stale (module or tests changed), so an interrupted run resumes;
+# the whole set is hours on the 2-core machine (README, "Tests"). MODULE narrows it, e.g.
+# make mutants MODULE=comparisons/judgments/rows.py. `make mutants-table` prints the scores
+# (a module with no result yet shows an earlier round's reading, tests/mutation_readings.toml).
 MUTATION_STAMP = $(VENV)/.installed-mutation
 MODULE ?=
 
