@@ -66,12 +66,13 @@ def _table(data: dict, key: str, where: str, required: bool) -> dict | None:
                                "--format fmu-mapping writes the template)")
         return None
     if not isinstance(value, dict):
-        raise MappingError(f"{where}: {key} must be a table [{key}]")
+        raise MappingError(f"{where}: {key} must be a table; got {value!r}; fix: write [{key}] "
+                           "on a line of its own, its keys on the lines below")
     return value
 
 
-def _refs(data: dict, key: str, keys: tuple[str, ...], where: str, names) -> tuple[Ref, ...]:
-    table = _table(data, key, where, True)
+def _exact_keys(table: dict, key: str, keys: tuple[str, ...], where: str) -> None:
+    """Refuse a table [key] that lacks one of ``keys`` or has another key."""
     missing = [k for k in keys if k not in table]
     if missing:
         raise MappingError(f"{where}: [{key}] lacks {', '.join(missing)}; fix: map each of "
@@ -80,7 +81,32 @@ def _refs(data: dict, key: str, keys: tuple[str, ...], where: str, names) -> tup
     if extra:
         raise MappingError(f"{where}: [{key}] has unknown keys {', '.join(extra)}; fix: use "
                            f"{', '.join(keys)}")
+
+
+def _refs(data: dict, key: str, keys: tuple[str, ...], where: str, names) -> tuple[Ref, ...]:
+    table = _table(data, key, where, True)
+    _exact_keys(table, key, keys, where)
     return tuple(_ref(where, f"{key}.{k}", table[k], names) for k in keys)
+
+
+def _pattern_names(where: str, term: str, pattern, names) -> tuple[tuple[str, ...], ...]:
+    """The variable names of term ``term``'s pattern: rows of columns, {i} and {j} 1-based."""
+    rows, cols = TERM_SHAPES[term]
+    example = f"term.{term}[{{i}},{{j}}]" if cols else f"term.{term}[{{i}}]"
+    if not isinstance(pattern, str):
+        raise MappingError(f"{where}: terms.{term} must be a name pattern; got {pattern!r}; "
+                           f"fix: e.g. {term} = \"{example}\"")
+    try:
+        return tuple(
+            tuple(_names(where, f"terms.{term}", pattern.format(i=i + 1, j=j + 1), names)
+                  for j in range(max(cols, 1))) for i in range(rows))
+    except (KeyError, IndexError, ValueError) as exc:
+        if isinstance(exc, MappingError):
+            raise
+        raise MappingError(f"{where}: terms.{term} = {pattern!r} is not a name pattern "
+                           f"({type(exc).__name__}: {exc}); fix: use only {{i}} (the row) and "
+                           f"{{j}} (the column), 1-based, and {{{{ }}}} for a literal brace, "
+                           f"e.g. {term} = \"{example}\"") from None
 
 
 def _names(where: str, field: str, value, names) -> str:
@@ -109,24 +135,18 @@ def parse_mapping(text: str, names: frozenset[str], where: str) -> FmuMapping:
     torques = _refs(data, "torques", TORQUE_NAMES, where, names)
     baumgarte = None
     if (table := _table(data, "baumgarte", where, False)) is not None:
-        if set(table) != {"a1", "a2"}:
-            raise MappingError(f"{where}: [baumgarte] must name exactly a1 and a2")
+        _exact_keys(table, "baumgarte", ("a1", "a2"), where)
         baumgarte = tuple(_names(where, f"baumgarte.{k}", table[k], names) for k in ("a1", "a2"))
     terms: dict[str, tuple[tuple[str, ...], ...]] = {}
     for term, pattern in (_table(data, "terms", where, False) or {}).items():
         if term not in TERM_SHAPES:
             raise MappingError(f"{where}: terms.{term} is not a term; fix: use "
                                f"{', '.join(TERM_SHAPES)}")
-        if not isinstance(pattern, str):
-            raise MappingError(f"{where}: terms.{term} must be a name pattern with {{i}} (and "
-                               "{j} for a matrix)")
-        rows, cols = TERM_SHAPES[term]
-        terms[term] = tuple(
-            tuple(_names(where, f"terms.{term}", pattern.format(i=i + 1, j=j + 1), names)
-                  for j in range(max(cols, 1))) for i in range(rows))
+        terms[term] = _pattern_names(where, term, pattern, names)
     residual = None
     if (table := _table(data, "residual", where, False)) is not None:
-        residual = tuple(_names(where, f"residual.{k}", table.get(k), names) for k in CONSTRAINT_NAMES)
+        _exact_keys(table, "residual", CONSTRAINT_NAMES, where)
+        residual = tuple(_names(where, f"residual.{k}", table[k], names) for k in CONSTRAINT_NAMES)
     parameters = {}
     for key, value in (_table(data, "parameters", where, False) or {}).items():
         if key not in PARAMETER_NAMES:
