@@ -133,11 +133,8 @@ def arrow_float(v: float) -> str:
     digits = digits.rstrip("0")
     if not digits:
         return sign + "0"
-    if -6 <= point - 1 < 10:
-        if point <= 0:
-            return f"{sign}0.{'0' * -point}{digits}"
-        return sign + (digits + "0" * (point - len(digits)) if point >= len(digits)
-                       else f"{digits[:point]}.{digits[point:]}")
+    if -6 <= point - 1 < 10:      # 1e-6 <= |v| < 1e-4 (the plain decimals above 1e-4 are repr's)
+        return f"{sign}0.{'0' * -point}{digits}"
     rest = f".{digits[1:]}" if len(digits) > 1 else ""
     return f"{sign}{digits[0]}{rest}e{'+' if point >= 1 else '-'}{abs(point - 1)}"
 
