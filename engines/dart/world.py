@@ -28,7 +28,7 @@ import numpy as np
 from reference_model.parameters.values import Parameters
 
 from .options import RunSettings
-from .skeleton import Coordinates, load_urdf, run_urdf
+from .skeleton import Coordinates, load_urdf, quiet, run_urdf
 
 import dartpy as dart
 
@@ -96,8 +96,7 @@ class RunWorld:
 
 def build_world(params: Parameters, s: RunSettings) -> RunWorld:
     """The run's world for settings ``s``."""
-    bike = load_urdf(run_urdf(params))
-    bike.setGravity(np.array([0.0, 0.0, -params.g]))
+    bike = load_urdf(run_urdf(params))      # its gravity is the world's (addSkeleton sets it)
     for b in WHEELS:
         shape = bike.getBodyNode(b).getShapeNode(0)
         shape.getShape().setHeight(2.0 * s.wheel_half_width)
@@ -118,5 +117,6 @@ def build_world(params: Parameters, s: RunSettings) -> RunWorld:
     solver.setCollisionDetector(getattr(dart.collision, DETECTORS[s.collision_detector])())
     solver.setSplitImpulseEnabled(s.split_impulse)
     if s.solver == "pgs":        # the secondary (fallback) solver as the only one
-        solver.setBoxedLcpSolver(solver.getSecondaryBoxedLcpSolver())
+        with quiet():            # DART 6.20 warns it ignores this, wrongly: it is set
+            solver.setBoxedLcpSolver(solver.getSecondaryBoxedLcpSolver())
     return RunWorld(world, bike, Coordinates.of(bike, RUN_COORDINATES), params)
