@@ -122,7 +122,7 @@ def arrow_float(v: float) -> str:
         return ""
     if v in (float("inf"), float("-inf")):
         return "inf" if v > 0 else "-inf"
-    text = repr(v)
+    text = repr(float(v))        # numpy's float64 reprs as np.float64(...) under numpy 2
     if 1e-4 <= abs(v) < 1e10:     # where repr is plain decimals already
         return text[:-2] if text.endswith(".0") else text
     sign, text = ("-", text[1:]) if text[0] == "-" else ("", text)
