@@ -128,24 +128,20 @@ def test_a_module_without_functions_has_nothing_to_mutate(tmp_path):
 
 # -- the rerun of mutmut's survivors, and the lock ------------------------------------------
 
-def _fake_venv(tmp_path: Path, mutants: dict[str, str | None]) -> Path:
-    """A bin/ with the interpreter running these tests as ``python`` and a ``mutmut`` whose
-    ``apply NAME`` writes ``mutants[NAME]`` over ``mod.py`` (None: apply fails, as for a name
-    mutmut does not know)."""
-    import json
+def _fake_venv(tmp_path: Path, mutants: dict[str, str | None], scratch: Path) -> Path:
+    """A bin/ with the interpreter running these tests as ``python``, and mutmut's mutated file
+    ``scratch/mutants/mod.py`` holding each mutant of ``mutants`` as mutmut names it (the
+    function ``add`` renamed to the mutant's key; None: a name the file does not have)."""
     import stat
     import sys
     bin_ = tmp_path / "bin"
     bin_.mkdir()
     (bin_ / "python").write_text(f'#!/bin/sh\nexec "{sys.executable}" "$@"\n')
-    (bin_ / "mutants.json").write_text(json.dumps(mutants))
-    (bin_ / "mutmut").write_text(
-        f"#!{sys.executable}\nimport json, pathlib, sys\n"
-        f"m = json.loads(pathlib.Path({str(bin_ / 'mutants.json')!r}).read_text())\n"
-        "if sys.argv[1] != 'apply' or m.get(sys.argv[2]) is None:\n    sys.exit(1)\n"
-        "pathlib.Path('mod.py').write_text(m[sys.argv[2]])\n")
-    for f in ("python", "mutmut"):
-        (bin_ / f).chmod((bin_ / f).stat().st_mode | stat.S_IXUSR)
+    (bin_ / "python").chmod((bin_ / "python").stat().st_mode | stat.S_IXUSR)
+    (scratch / "mutants").mkdir(parents=True, exist_ok=True)
+    (scratch / "mutants" / "mod.py").write_text("".join(
+        body.replace("def add(", f"def {name.rpartition('.')[2]}(") + "\n\n"
+        for name, body in mutants.items() if body is not None))
     return bin_
 
 
@@ -163,7 +159,7 @@ def test_confirm_counts_a_survivor_killed_only_by_the_whole_selection(tmp_path):
     names = ["mod.x_add__mutmut_1", "mod.x_add__mutmut_2", "mod.x_add__mutmut_3"]
     bin_ = _fake_venv(tmp_path, {names[0]: "def add(a, b):\n    return a - b\n",
                                  names[1]: "def add(a, b):\n    return b + a\n",
-                                 names[2]: None})
+                                 names[2]: None}, scratch)
     seen = []
     killed = mutation.confirm("mod.py", names, ["test_mod.py"], scratch, bin_,
                               progress=seen.append, workers=2)
@@ -171,6 +167,34 @@ def test_confirm_counts_a_survivor_killed_only_by_the_whole_selection(tmp_path):
     assert (scratch / "mod.py").read_text() == original
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "scratch"]
     assert seen and seen[-1].endswith("rerun 3/3 survivors on the whole selection, 1 killed")
+
+
+def test_a_methods_mutant_replaces_that_classs_method_only(tmp_path):
+    """Two classes with an __init__ each: a mutant of the second class's __init__ (mutmut's
+    key names the class) goes into that class, the first is left as it was; a top-level
+    function's mutant replaces that function. Written out by hand. ``mutmut apply`` (3.8.1)
+    wrote it over the first __init__ of the file: 16 mutants of engines/exudyn/tree.py were
+    then counted killed by the rerun, 8 of which survive."""
+    scratch = tmp_path / "s"
+    (scratch / "mutants").mkdir(parents=True)
+    (scratch / "mod.py").write_text(
+        "class A:\n    def __init__(self):\n        self.x = 1\n\n\n"
+        "class B:\n    def __init__(self):\n        self.y = 2\n\n\n"
+        "def f(v):\n    return v + 1\n")
+    (scratch / "mutants" / "mod.py").write_text(
+        "class A:\n    def __init__(self):\n        self.x = 1\n"
+        "    def xǁAǁ__init____mutmut_1(self):\n        self.x = 2\n\n\n"
+        "class B:\n    def __init__(self):\n        self.y = 2\n"
+        "    def xǁBǁ__init____mutmut_1(self):\n        self.y = 3\n\n\n"
+        "def x_f__mutmut_2(v):\n    return v - 1\n")
+    assert mutation.mutated_source(scratch, "mod.py", "mod.xǁBǁ__init____mutmut_1") == (
+        "class A:\n    def __init__(self):\n        self.x = 1\n\n\n"
+        "class B:\n    def __init__(self):\n        self.y = 3\n\n\n"
+        "def f(v):\n    return v + 1\n")
+    assert mutation.mutated_source(scratch, "mod.py", "mod.x_f__mutmut_2").endswith(
+        "def f(v):\n    return v - 1\n")
+    assert "self.x = 2" in mutation.mutated_source(scratch, "mod.py", "mod.xǁAǁ__init____mutmut_1")
+    assert mutation.mutated_source(scratch, "mod.py", "mod.xǁCǁ__init____mutmut_1") is None
 
 
 def test_a_second_measuring_run_on_the_same_out_stops_at_once(tmp_path):
@@ -360,7 +384,7 @@ def _refresh_tree(tmp_path):
     (scratch / "tests" / "test_mod.py").write_text("def test_nothing():\n    pass\n")
     names = ["mod.x_add__mutmut_1", "mod.x_add__mutmut_2"]
     bin_ = _fake_venv(tmp_path, {names[0]: "def add(a, b):\n    return a - b\n",
-                                 names[1]: "def add(a, b):\n    return b + a\n"})
+                                 names[1]: "def add(a, b):\n    return b + a\n"}, scratch)
     return root, scratch, names, bin_
 
 
