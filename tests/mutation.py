@@ -532,7 +532,7 @@ def equivalents(root: Path = ROOT) -> dict[str, str]:
 
 def readings(path: Path = READINGS) -> dict[str, dict]:
     """The earlier rounds' readings (``tests/mutation_readings.toml``): module -> its table
-    (tried, killed, round, date, and the flags sweep_tests and stopped)."""
+    (tried, killed, round, date, and the flags sweep_tests, stopped and same_name_rerun)."""
     if not path.is_file():
         return {}
     return tomllib.loads(path.read_text("utf-8"))
@@ -561,7 +561,9 @@ def table(results: Path = RESULTS, readings_path: Path = READINGS) -> str:
         if res is None and module in old:
             r = old[module]
             flags = "".join([", its selection starts the sweep's Dask tests" if r.get("sweep_tests") else "",
-                             ", stopped before its end" if r.get("stopped") else ""])
+                             ", stopped before its end" if r.get("stopped") else "",
+                             ", its rerun may have put a survivor into another method of its "
+                             "name" if r.get("same_name_rerun") else ""])
             read_rows.append(f"| `{module}` | {r['tried']} | {r['killed']} | "
                              f"{_pct(r['killed'], r['tried'])} | ? | {r['tried'] - r['killed']} | "
                              f"? | ? | ? | ? | reading of the {r['round']} round ({r['date']}){flags} |")

@@ -479,6 +479,7 @@ def test_an_earlier_reading_stands_in_for_a_missing_result_and_is_summed_apart(t
                    results)
     path.write_text('["engines/base.py"]\ntried = 50\nkilled = 40\nround = "fourth"\n'
                     'date = "2026-12-02"\nsweep_tests = true\nstopped = true\n'
+                    'same_name_rerun = true\n'
                     '["engines/runs.py"]\ntried = 1\nkilled = 0\nround = "third"\n'
                     'date = "2026-12-02"\n')
     text = mutation.table(results, path)
@@ -486,7 +487,8 @@ def test_an_earlier_reading_stands_in_for_a_missing_result_and_is_summed_apart(t
     row = next(ln for ln in lines if ln.startswith("| `engines/base.py`"))
     assert row.startswith("| `engines/base.py` | 50 | 40 | 80.0 % |")
     assert row.endswith("| reading of the fourth round (2026-12-02), its selection starts the "
-                        "sweep's Dask tests, stopped before its end |")
+                        "sweep's Dask tests, stopped before its end, its rerun may have put a "
+                        "survivor into another method of its name |")
     runs = [ln for ln in lines if ln.startswith("| `engines/runs.py`")]
     assert len(runs) == 1 and runs[0].startswith("| `engines/runs.py` | 9 | 7 |")
     assert any(ln.startswith("| **1 measured** | 9 | 7 | 77.8 % |") for ln in lines)
