@@ -22,10 +22,11 @@ from comparisons.stages.sweep_deadline import limited_chunk_rows, one_line
 from comparisons.stages.sweep_spec import make_spec
 from reference_model import load_model
 
-# the limit a slow bicycle overruns: short, so the suite waits little; the slow bicycle sleeps
-# ten times as long, far past any scheduling delay of a loaded 2-core machine
-LIMIT = 0.05
-SLOW = 0.5
+# the limit a slow bicycle overruns: short, so the suite waits little, yet 0.2 s is far past
+# the start of a thread and a queue's hand-over on a loaded 2-core machine (a quick bicycle
+# must never time out); the slow bicycle sleeps five times as long
+LIMIT = 0.2
+SLOW = 1.0
 HELPER = "bicycle-xval-bicycle"
 
 
@@ -51,7 +52,7 @@ def _bicycles(monkeypatch, behaviour):
 
 
 def test_a_late_bicycle_is_a_failed_row_and_the_chunk_goes_on(spec, monkeypatch):
-    """The first bicycle sleeps past the limit: its row is failed, 'timed out after 0.05 s',
+    """The first bicycle sleeps past the limit: its row is failed, 'timed out after 0.2 s',
     with its grid point (m3 = 85, the --vary's first value); the second is still computed, by
     a fresh helper (the late one is busy). Fails when the wait has no limit (the late row comes
     back as computed), when the loop stops after a late bicycle (`break`), when the failed row
@@ -63,7 +64,7 @@ def test_a_late_bicycle_is_a_failed_row_and_the_chunk_goes_on(spec, monkeypatch)
     assert len(rows) == 2
     late, ok = rows
     assert late["status"] == "failed"
-    assert late["failures"] == "timed out after 0.05 s"
+    assert late["failures"] == "timed out after 0.2 s"
     assert late["bicycle"] == 0
     assert late["vary.m3"] == 85.0
     assert ok == {"bicycle": 1, "status": "ok"}
@@ -77,7 +78,7 @@ def test_the_last_bicycle_late_ends_the_chunk_cleanly(spec, monkeypatch):
     rows = limited_chunk_rows(spec, [0, 1], LIMIT)
     assert [r["status"] for r in rows] == ["ok", "failed"]
     assert rows[1]["vary.m3"] == 95.0
-    assert rows[1]["failures"] == "timed out after 0.05 s"
+    assert rows[1]["failures"] == "timed out after 0.2 s"
 
 
 @pytest.mark.parametrize("exc, text", [
@@ -90,7 +91,7 @@ def test_what_a_bicycle_raises_is_its_failed_row(spec, monkeypatch, exc, text):
     on one line, and the next bicycle is computed by the same helper. Fails when the raise is
     reported as a result, or lost (the helper's loop putting nothing usable back)."""
     _bicycles(monkeypatch, {0: exc, 1: "ok"})
-    rows = limited_chunk_rows(spec, [0, 1], LIMIT * 20)
+    rows = limited_chunk_rows(spec, [0, 1], LIMIT * 5)
     assert rows[0]["status"] == "failed"
     assert rows[0]["failures"] == text
     assert rows[0]["bicycle"] == 0 and rows[0]["vary.m3"] == 85.0
