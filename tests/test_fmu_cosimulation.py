@@ -562,3 +562,68 @@ def test_t_end_cuts_the_grid_and_other_options_are_refused(engine):
     with pytest.raises(Exception, match=r"Co-Simulation run takes no atol, rtol \(the FMU "
                                         r"integrates with its own method and step\); fix: "):
         engine.simulate(sc, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("mirror", [False, True], ids=["theta>0", "theta<0"])
+def test_the_master_stops_at_the_falls_grid_sample(engine, falling, monkeypatch, mirror):
+    """fmpy's master is asked to stop (its step_finished callback returns False) on the
+    communication step that lands on the run's last grid sample, the first past the limit,
+    and on no earlier step: nothing after the fall is computed. Read from the callback fmpy
+    calls, wrapped here. Fails when the stop is tested off the grid's samples, on another
+    sample, on another row of the recorder, or never (the run then goes on to 0.6 s)."""
+    import fmpy
+    calls = []
+    real = fmpy.simulate_fmu
+
+    def spy(*args, step_finished=None, **kw):
+        def wrapped(now, recorder):
+            go_on = step_finished(now, recorder)
+            calls.append((now, go_on))
+            return go_on
+        return real(*args, step_finished=wrapped, **kw)
+    monkeypatch.setattr(fmpy, "simulate_fmu", spy)
+    sc = _mirrored(falling) if mirror else falling
+    got = engine.simulate(sc, fall_limit=0.3)
+    assert got.status == "fell"
+    stops = [now for now, go_on in calls if not go_on]
+    assert len(stops) == 1 and calls[-1][1] is False
+    assert stops[0] == pytest.approx(got.t[-1], abs=1e-12)
+
+
+def test_a_step_failing_before_the_first_sample_holds_the_start_alone(engine):
+    """Torques NaN from 2 ms on a 10 ms grid: the FMU fails within the first grid interval,
+    after a few communication steps; the run holds the start (the one grid sample reached),
+    not a sample made up past the failure."""
+    sc = dataclasses.replace(get_scenario("stability-psid5"), grid=(0.0, 0.01, 11),
+                             torques=lambda tk: (0.0, 0.0, 0.0) if tk < 0.002
+                             else (float("nan"),) * 3)
+    got = engine.simulate(sc)
+    assert got.status == "failed"
+    assert got.t.tolist() == [0.0] and got.q.shape == (1, 8)
+
+
+def test_t_end_refusals_and_two_samples_whole(engine):
+    """t_end leaving one sample is refused in one line naming the grid's start and the fix;
+    leaving exactly two is a run of two samples, their ddq the first-order difference of dq
+    (numpy's gradient on two points) and a three-sample run's middle row the central
+    difference; an unknown constraint handling is refused naming the three."""
+    sc = get_scenario("stability-psid5")
+    with pytest.raises(ValueError, match=r"^t_end=0\.005 leaves fewer than two samples of the "
+                                         r"scenario's grid \(from 0 s\); fix: a later t_end"):
+        engine.simulate(sc, t_end=0.005)
+    dt = sc.t[1] - sc.t[0]
+    two = engine.simulate(sc, t_end=dt)
+    assert two.t.size == 2
+    first = (two.dq[1] - two.dq[0]) / (two.t[1] - two.t[0])
+    assert np.array_equal(two.ddq, np.vstack([first, first]))
+    three = engine.simulate(sc, t_end=2 * dt)
+    assert three.t.size == 3
+    central = (three.dq[2] - three.dq[0]) / (three.t[2] - three.t[0])
+    assert np.max(np.abs(three.ddq[1] - central)) <= 1e-12 * max(1.0, np.max(np.abs(central)))
+    assert 0.0 <= three.timing["wall_seconds"] < 60.0
+    with pytest.raises(ValueError, match=r"^constraints='exact': fix: 'baumgarte', 'none' or "
+                                         r"'projection'"):
+        engine.simulate(sc, constraints="exact")
+    with pytest.raises(Exception, match=r"fix: leave it out, or use the Model-Exchange "
+                                        r"interface \(interface=me\)"):
+        engine.simulate(sc, atol=1e-12)

@@ -107,7 +107,7 @@ def co_simulate(engine, scenario: Scenario, fall_limit: float | None = None,
                                    f"t = {t[fell[0]]:.6f} s (first sample past it)")
     tt = t[:Y.shape[0]]
     q, dq = Y[:, :8], Y[:, 8:]
-    ddq = np.gradient(dq, tt, axis=0) if tt.size > 2 else np.zeros_like(dq)
+    ddq = np.gradient(dq, tt, axis=0) if tt.size >= 2 else np.zeros_like(dq)
     torque = torque_input(engine.model, scenario)
     T = np.array([torque(tk) if callable(torque) else torque for tk in tt], dtype=float).reshape(-1, 3)
     return Trajectory(
