@@ -365,9 +365,12 @@ def confirm(module: str, names, tests: list[str], scratch: Path, venv_bin: Path,
     then run against one test, while every test using the fixture would see it. Here each
     survivor is written into the module's source alone (`mutated_source`) and the whole
     selection run (pytest, stopping at the first failure) on a copy of the scratch tree
-    holding that module: ``workers`` copies, one pytest each at a time."""
+    holding that module: ``workers`` copies, one pytest each at a time. The selection is run
+    once on the unmutated copy first: if it fails there, nothing is counted (SystemExit)."""
     import concurrent.futures
     import queue
+    if not names:
+        return ()
     source = scratch / module
     original = source.read_bytes()
     args = [str(venv_bin / "python"), "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
@@ -382,6 +385,21 @@ def confirm(module: str, names, tests: list[str], scratch: Path, venv_bin: Path,
                         ignore=shutil.ignore_patterns(*COPY_IGNORE))
         trees.put(tree)
     done, killed = [0], []
+    # the selection must pass on the unmutated tree, or every survivor would count as killed
+    # (seen: a refresh ran today's tests of a module changed since on its measured copy)
+    tree = trees.get()
+    try:
+        baseline = subprocess.run(args, cwd=tree, capture_output=True, text=True, timeout=1800,
+                                  check=False)
+    finally:
+        trees.put(tree)
+    if baseline.returncode not in (0, 5):
+        while not trees.empty():
+            shutil.rmtree(trees.get(), ignore_errors=True)
+        tail = [ln for ln in baseline.stdout.splitlines() if ln.strip()][-3:]
+        raise SystemExit(f"error: {module}: its selection fails on the unmutated scratch copy "
+                         f"{scratch} ({' / '.join(tail)}); the code or tests changed since the "
+                         f"measurement: measure {module} again")
 
     def one(name: str) -> bool:
         text = mutated_source(scratch, module, name)

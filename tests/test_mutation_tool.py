@@ -495,3 +495,22 @@ def test_an_earlier_reading_stands_in_for_a_missing_result_and_is_summed_apart(t
     assert any(ln.startswith("| **2 measured, 1 of them earlier readings** | 59 | 47 | 79.7 % |")
                for ln in lines)
     assert "`engines/base.py`" not in text.split("Not measured yet")[1]
+
+
+def test_a_rerun_refuses_a_selection_that_fails_on_the_unmutated_copy(tmp_path):
+    """Today's tests run on a scratch copy measured before a change they expect fail for every
+    survivor: all would count as killed (seen: the FMU mapping's four equivalent mutants
+    'killed' by a co-simulation test written for code changed since). The rerun runs the
+    selection on the unmutated copy first and stops in one line saying to measure again."""
+    import pytest
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    (scratch / "mod.py").write_text("def add(a, b):\n    return a + b\n")
+    (scratch / "test_mod.py").write_text("from mod import add\n\n\n"
+                                         "def test_add():\n    assert add(2, 3) == 6\n")
+    names = ["mod.x_add__mutmut_1"]
+    bin_ = _fake_venv(tmp_path, {names[0]: "def add(a, b):\n    return a - b\n"}, scratch)
+    with pytest.raises(SystemExit, match=r"^error: mod.py: its selection fails on the unmutated "
+                                         r"scratch copy .*: measure mod.py again$"):
+        mutation.confirm("mod.py", names, ["test_mod.py"], scratch, bin_, progress=lambda *a: None)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "scratch"]
