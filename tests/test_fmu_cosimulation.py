@@ -627,3 +627,44 @@ def test_t_end_refusals_and_two_samples_whole(engine):
     with pytest.raises(Exception, match=r"fix: leave it out, or use the Model-Exchange "
                                         r"interface \(interface=me\)"):
         engine.simulate(sc, atol=1e-12)
+
+
+def test_a_grid_from_a_later_start_stops_on_its_own_samples(engine, falling, monkeypatch):
+    """The falling scenario's grid shifted to start at 0.105 s (its samples 0.105 + k 0.01): the
+    master's stop lands on the run's last sample, a time of that grid, not of a grid from 0
+    (the sample index is counted from the run's start)."""
+    import fmpy
+    calls = []
+    real = fmpy.simulate_fmu
+
+    def spy(*args, step_finished=None, **kw):
+        def wrapped(now, recorder):
+            go_on = step_finished(now, recorder)
+            calls.append((now, go_on))
+            return go_on
+        return real(*args, step_finished=wrapped, **kw)
+    monkeypatch.setattr(fmpy, "simulate_fmu", spy)
+    sc = dataclasses.replace(falling, grid=(0.105, 0.01, 60))
+    got = engine.simulate(sc, fall_limit=0.3)
+    assert got.status == "fell"
+    stops = [now for now, go_on in calls if not go_on]
+    assert len(stops) == 1 and stops[0] == pytest.approx(got.t[-1], abs=1e-12)
+    assert round((got.t[-1] - 0.105) / 0.01, 9) % 1 == 0
+
+
+def test_constraints_none_runs_without_baumgarte_and_says_so(engine):
+    """constraints='none' (an option `run` passes) is taken, not refused: the FMU's Baumgarte
+    parameters at 0 and the settings naming it."""
+    sc = dataclasses.replace(get_scenario("stability-psid5"), grid=(0.0, 0.01, 6))
+    got = engine.simulate(sc, constraints="none")
+    assert got.status == "completed" and got.settings["constraints"] == "none"
+
+
+def test_a_long_error_line_is_cut_at_160_characters(engine, monkeypatch):
+    """The failure message keeps at most 160 characters of fmpy's first line (the report's
+    status column)."""
+    def fail(*args, **kwargs):
+        raise RuntimeError("x" * 300 + "\nmore")
+    monkeypatch.setattr(fmpy, "simulate_fmu", fail)
+    sc = dataclasses.replace(get_scenario("stability-psid5"), grid=(0.0, 0.01, 11))
+    assert engine.simulate(sc).message == PREFIX + "x" * 160
