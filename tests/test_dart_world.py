@@ -23,6 +23,7 @@ dart = pytest.importorskip("dartpy")
 
 from engines.dart.options import RunSettings  # noqa: E402
 from engines.dart.world import RUN_COORDINATES, build_world  # noqa: E402
+from standing import static_split  # noqa: E402
 
 #: every option away from its default (options.py's DEFAULTS), so that a setting dropped on the
 #: way to DART's world shows as DART's default or ours
@@ -175,21 +176,6 @@ def test_wheel_contact_is_the_references_contact_point_velocity_and_depth(defaul
         assert front == pytest.approx((np.hypot(C[3], C[4]), -(zc + C[0])), rel=0, abs=1e-13)
 
 
-def _static_split(model):
-    """(rear, front) normal forces (N) on the bicycle standing upright and still at q = 0:
-    vertical balance N_C + N_D = m g and moments about the rear contact C along the pitch
-    axis, N_D l = m g x_G (x_G the total CoM's distance ahead of C, l the wheelbase, both from
-    the reference's points; the horizontal contact forces act at ground level on the line
-    through C and give no moment about it)."""
-    p, pts = model.params, model.points(np.zeros(8))
-    masses = {b: getattr(p, f"m{b}") for b in (2, 3, 4, 5)}
-    m = sum(masses.values())
-    x_G = sum(mb * (pts[f"rG{b}"][0] - pts["rC"][0]) for b, mb in masses.items()) / m
-    l = pts["rD"][0] - pts["rC"][0]
-    front = m * p.g * x_G / l
-    return m * p.g - front, front
-
-
 def _standing(model, settings, wheel_second=False):
     """A run world with the bicycle upright and still on the ground (q = 0, zc = 0), with the
     ground added to the world first when ``wheel_second``."""
@@ -218,7 +204,7 @@ def test_no_contact_no_normal_force(disc):
 def test_at_rest_the_normal_forces_are_the_weight_split_by_the_moment_balance(disc):
     """The bicycle upright and still on the ground at the defaults (ODE's detector, Dantzig):
     after three steps the rear and front normal forces are the static split of its weight
-    (582.2 N and 245.2 N of 827.4 N on thesis-disc; `_static_split`). Each wheel is here the
+    (582.2 N and 245.2 N of 827.4 N on thesis-disc; `static_split`). Each wheel is here the
     first collision object of its contacts (checked), whose force DART's Contact.force is
     ("Contact force acting on bodyNode1", dart/collision/Contact.hpp). Bound 1e-5 relative:
     DART's contact is rigid up to its error reduction, which leaves the still bicycle moving
@@ -234,7 +220,7 @@ def test_at_rest_the_normal_forces_are_the_weight_split_by_the_moment_balance(di
     for i in range(result.getNumContacts()):
         assert result.getContact(i).collisionObject1.getShapeFrame().getName() in wheels
     rear, front = rw.normal_forces()
-    expected = _static_split(disc)
+    expected = static_split(disc)
     assert rear == pytest.approx(expected[0], rel=1e-5)
     assert front == pytest.approx(expected[1], rel=1e-5)
 
@@ -244,7 +230,7 @@ def test_the_normal_force_does_not_depend_on_which_object_dart_lists_first(disc)
     (dart/collision/Contact.hpp); which one a wheel is depends on the detector: Bullet lists
     the skeleton added first first, so with the ground added before the bicycle each wheel is
     the second object (checked) and the force on it is -Contact.force. The normal forces are
-    still the static split of the weight (`_static_split`). Bound 1e-3 relative: Bullet's
+    still the static split of the weight (`static_split`). Bound 1e-3 relative: Bullet's
     contact leaves the split 1e-4 off the static one (measured after 6 steps: Bullet finds the
     rear contact only once the wheel has sunk, 2e-6 m after the first step, and its error
     reduction is still pushing the wheel out), and a wrong sign is off
@@ -259,6 +245,6 @@ def test_the_normal_force_does_not_depend_on_which_object_dart_lists_first(disc)
     for i in range(result.getNumContacts()):
         assert result.getContact(i).collisionObject2.getShapeFrame().getName() in wheels
     rear, front = rw.normal_forces()
-    expected = _static_split(disc)
+    expected = static_split(disc)
     assert rear == pytest.approx(expected[0], rel=1e-3)
     assert front == pytest.approx(expected[1], rel=1e-3)

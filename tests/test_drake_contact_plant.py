@@ -33,6 +33,7 @@ from pydrake.multibody.plant import (CalcContactFrictionFromSurfaceProperties,  
 import engines.drake.contact_plant as contact_plant  # noqa: E402
 from engines.drake.contact_plant import RUN_COORDINATES, build_run_plant  # noqa: E402
 from engines.drake.options import RunSettings  # noqa: E402
+from standing import static_split  # noqa: E402
 
 #: point contact with every option away from its default (options.py) and from Drake's own
 #: defaults (SceneGraphConfig().default_proximity_properties: friction 0.5, point stiffness
@@ -208,21 +209,6 @@ def test_point_contact_carries_the_friction_stiffness_and_dissipation_given(requ
                                                                   rel=1e-15)
 
 
-def _static_split(model, q):
-    """(rear, front) normal forces (N) on the bicycle standing upright and still at ``q``:
-    vertical balance N_C + N_D = m g and moments about the rear contact C along the pitch axis,
-    N_D l = m g x_G (x_G the total CoM's distance ahead of C, l the wheelbase, both from the
-    reference's points; the horizontal contact forces act at ground level on the line through
-    C and give no moment about it)."""
-    p, pts = model.params, model.points(q)
-    masses = {b: getattr(p, f"m{b}") for b in (2, 3, 4, 5)}
-    m = sum(masses.values())
-    x_G = sum(mb * (pts[f"rG{b}"][0] - pts["rC"][0]) for b, mb in masses.items()) / m
-    l = pts["rD"][0] - pts["rC"][0]
-    front = m * p.g * x_G / l
-    return m * p.g - front, front
-
-
 def test_a_bicycle_standing_still_sinks_by_its_load_over_the_pairs_stiffness(bench):
     """Statics on Drake's own contact: the benchmark bicycle upright and still on the ground
     (q = 0 projected onto the constraints, which pitches its frame by beta = -pi/10 so that the
@@ -230,7 +216,7 @@ def test_a_bicycle_standing_still_sinks_by_its_load_over_the_pairs_stiffness(ben
     limit, docs/engines.md) at point_stiffness 4e7 N/m and dissipation 3 s/m, stepped 0.1 s
     (100 steps of 1e-3 s; the contact's vertical mode, sqrt(k / m) ~ 1e3 rad/s, settles within
     them: the rate of zc is 1e-15 m/s after). Then Drake's contact results (the ground's
-    vertical force on each wheel) are the static split of the weight (`_static_split`: 612.8 N
+    vertical force on each wheel) are the static split of the weight (`static_split`: 612.8 N
     rear, 309.3 N front of 922.1 N), and each wheel's penetration (QueryObject.
     ComputePointPairPenetration, Drake's own geometry) is its force over the pair's stiffness,
     the given 4e7 N/m (a sink of 1.5e-5 m rear, 7.7e-6 m front). Bounds: 1e-4 of the weight
@@ -267,7 +253,7 @@ def test_a_bicycle_standing_still_sinks_by_its_load_over_the_pairs_stiffness(ben
             force[index[c.bodyA_index()]] -= c.contact_force()[2]
     p = model.params
     weight = p.g * (p.m2 + p.m3 + p.m4 + p.m5)
-    rear, front = _static_split(model, q)
+    rear, front = static_split(model, q)
     assert abs(force[2] - rear) <= 1e-4 * weight and abs(force[5] - front) <= 1e-4 * weight
     for b in (2, 5):
         assert force[b] / depth[b] == pytest.approx(s.point_stiffness, rel=1e-6)

@@ -16,6 +16,7 @@ from engines import CapabilityError, EngineError, load_engine
 from engines.exudyn import ExudynEngine
 from engines.exudyn.mapping import body_states, poses_to_q, unwrap_angles, velocities_to_dq
 from engines.exudyn.tree import ThesisFrontContact
+from exudyn_checks import random_states
 from reference_model import load_model
 from reference_model.model import Model
 from reference_model.scenarios import SCENARIOS, Scenario, run_forward
@@ -34,13 +35,8 @@ def _rows(t_seconds):
 
 
 def _random_states(n, seed):
-    rng = np.random.default_rng(seed)
-    q = rng.uniform(-np.pi, np.pi, (n, 8))
-    q[:, :2] = rng.uniform(-10, 10, (n, 2))
-    q[:, 3] = rng.uniform(-1.3, 1.3, n)          # roll short of the fall
-    q[:, 5] = rng.uniform(-0.6, 0.6, n)          # frame pitch
-    q[:, 6] = rng.uniform(-1.5, 1.5, n)          # steer
-    return q, rng.uniform(-20, 20, (n, 8)), rng.uniform(-10, 10, (n, 3))
+    q, dq, rng = random_states(n, seed)
+    return q, dq, rng.uniform(-10, 10, (n, 3))
 
 
 # -- terms of the tree -------------------------------------------------------------------------

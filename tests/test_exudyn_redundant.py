@@ -28,10 +28,10 @@ exu = pytest.importorskip("exudyn")
 from exudyn.itemInterface import SensorBody  # noqa: E402
 
 from engines.exudyn.engine import quiet  # noqa: E402
+from exudyn_checks import H, rotations, settings, solve  # noqa: E402
 from engines.exudyn.redundant import RedundantBuild  # noqa: E402
 from reference_model.solvers import consistent_state  # noqa: E402
 
-H = 1e-3                 # s, the engine's run step (engines/exudyn/engine.py RUN_STEP)
 STEPS = 20               # 0.02 s: enough samples for the read-back checks, milliseconds to run
 TWO_PI = 2 * np.pi
 #: xc, yc, phi, theta, psi, beta (solved), gamma, eps: leaned 0.3 rad, steered 0.5 rad; phi,
@@ -40,50 +40,6 @@ Q_GIVEN = (0.4, -0.3, 0.5 + TWO_PI, 0.3, 1.0 + TWO_PI, 0.0, 0.5, -0.7 - TWO_PI)
 #: the independent rates theta', psi', gamma' (rad/s): rolling forward at ~1.6 m/s
 DQ_IND = (0.2, 5.0, -0.3)
 E_Y, E_Z = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
-
-
-def _Rx(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _Ry(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def _Rz(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _rotations(q):
-    """A_lean and A2..A5 as docs/engines.md writes them (a second formulation of mapping.py's)."""
-    lean = _Rz(q[2]) @ _Rx(q[3])
-    A3 = lean @ _Ry(q[5])
-    A4 = A3 @ _Rz(q[6])
-    return {"lean": lean, 2: lean @ _Ry(q[4]), 3: A3, 4: A4, 5: A4 @ _Ry(q[7])}
-
-
-def _settings(n_steps, newton_tolerance=1e-10, newton_iterations=None):
-    ss = exu.SimulationSettings()
-    ti = ss.timeIntegration
-    ti.numberOfSteps, ti.startTime, ti.endTime = n_steps, 0.0, n_steps * H
-    ti.verboseMode = ti.verboseModeFile = 0
-    ti.automaticStepSize = ti.adaptiveStep = False
-    ti.newton.relativeTolerance = ti.newton.absoluteTolerance = newton_tolerance
-    if newton_iterations is not None:
-        ti.newton.maxIterations = newton_iterations
-    ti.generalizedAlpha.computeInitialAccelerations = True
-    ss.solution.file.write = False            # the solution file is the engine's setting; the
-    ss.solution.sensors.writePeriod = H       # sensors' files are the build's (add_sensors)
-    ss.show.computationTime = ss.show.statistics = False
-    return ss
-
-
-def _solve(mbs, settings):
-    exu.SolveDynamic(mbs, settings, solverType=exu.DynamicSolverType.GeneralizedAlpha,
-                     showHints=False, showCausingItems=False)
 
 
 @pytest.fixture(scope="module")
@@ -117,7 +73,7 @@ def run(general_disc, state, tmp_path_factory):
                    for key, b, var in (("r2", 2, ovt.Position), ("A3", 3, ovt.RotationMatrix))}
             mbs.Assemble()
             before = {"theta": build.theta_now(mbs), "read": build.read(mbs, q0)}
-            _solve(mbs, _settings(STEPS))
+            solve(mbs, settings(STEPS))
             after = build.read(mbs, q0)
             wrapped = build.read(mbs)
         files = sorted(p.name for p in folder.rglob("*"))
@@ -156,7 +112,7 @@ def test_markers_are_the_body_coms_in_body_axes_and_the_ground_origin(general_di
     ground origin."""
     mbs, build = run["mbs"], run["build"]
     q0, _ = state
-    pts, A = general_disc.points(q0), _rotations(q0)
+    pts, A = general_disc.points(q0), rotations(q0)
     ovt = exu.OutputVariableType
     assert set(build.markers) == {"rear", "frame", "fork", "front", "frame_com", "ground"}
     for key, b in (("rear", 2), ("frame", 3), ("fork", 4), ("front", 5)):
@@ -185,7 +141,7 @@ def test_joints_join_the_documented_bodies_at_the_hubs_and_the_steering_axis(
     joins other bodies, or sits at another point or axis."""
     mbs, build = run["mbs"], run["build"]
     q0, _ = state
-    pts, A = general_disc.points(q0), _rotations(q0)
+    pts, A = general_disc.points(q0), rotations(q0)
     ovt, ref = exu.OutputVariableType, exu.ConfigurationType.Reference
     expected = {"rear hub": ({3, 2}, pts["rG2"], A["lean"] @ E_Y),
                 "steer": ({3, 4}, pts["rA"], A[3] @ E_Z),
@@ -301,7 +257,7 @@ def test_a_run_that_fails_at_its_first_step_reads_back_its_start(general_disc, s
         build.add_sensors(mbs)
         mbs.Assemble()
         with pytest.raises(exu.SolverError):
-            _solve(mbs, _settings(STEPS, newton_tolerance=1e-300, newton_iterations=1))
+            solve(mbs, settings(STEPS, newton_tolerance=1e-300, newton_iterations=1))
     t, q, dq = build.read(mbs, q0)
     np.testing.assert_array_equal(t, [0.0])
     np.testing.assert_allclose(q, [q0], rtol=0, atol=1e-12)

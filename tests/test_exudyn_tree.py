@@ -33,10 +33,10 @@ exu = pytest.importorskip("exudyn")
 
 from engines import load_engine  # noqa: E402
 from engines.exudyn.engine import quiet  # noqa: E402
+from exudyn_checks import H, random_states, rotations, settings, solve  # noqa: E402
 from engines.exudyn.tree import ThesisFrontContact, TreeBuild, TreeMassMatrix  # noqa: E402
 from reference_model.solvers import consistent_state  # noqa: E402
 
-H = 1e-3                 # s, the engine's run step (engines/exudyn/engine.py RUN_STEP)
 STEPS = 20               # 0.02 s: enough samples for the read-back checks, milliseconds to run
 #: xc, yc, phi, theta, psi, beta (solved), gamma, eps: leaned 0.3 rad, steered 0.5 rad
 Q_GIVEN = (0.4, -0.3, 0.5, 0.3, 1.0, 0.0, 0.5, -0.7)
@@ -47,62 +47,6 @@ DQ_IND = (0.2, 5.0, -0.3)
 HEIGHT, FRONT = 0, [3, 4]
 #: round-off between two exact formulations of the same rows (test_exudyn.py's figure)
 ROUND_OFF = 1e-12
-
-
-def _Rx(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _Ry(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def _Rz(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _rotations(q):
-    """A2..A5 as docs/engines.md writes them (a second formulation of mapping.py's)."""
-    lean = _Rz(q[2]) @ _Rx(q[3])
-    A3 = lean @ _Ry(q[5])
-    A4 = A3 @ _Rz(q[6])
-    return {2: lean @ _Ry(q[4]), 3: A3, 4: A4, 5: A4 @ _Ry(q[7])}
-
-
-def _settings(n_steps, newton_tolerance=1e-10, newton_iterations=None):
-    ss = exu.SimulationSettings()
-    ti = ss.timeIntegration
-    ti.numberOfSteps, ti.startTime, ti.endTime = n_steps, 0.0, n_steps * H
-    ti.verboseMode = ti.verboseModeFile = 0
-    ti.automaticStepSize = ti.adaptiveStep = False
-    ti.newton.relativeTolerance = ti.newton.absoluteTolerance = newton_tolerance
-    if newton_iterations is not None:
-        ti.newton.maxIterations = newton_iterations
-    ti.generalizedAlpha.computeInitialAccelerations = True
-    ss.solution.file.write = False            # the solution file is the engine's setting; the
-    ss.solution.sensors.writePeriod = H       # sensors' files are the build's (add_sensors)
-    ss.show.computationTime = ss.show.statistics = False
-    return ss
-
-
-def _solve(mbs, settings, solver="GeneralizedAlpha"):
-    exu.SolveDynamic(mbs, settings, solverType=getattr(exu.DynamicSolverType, solver),
-                     showHints=False, showCausingItems=False)
-
-
-def _general_states(n, seed):
-    """n states (q, dq) of the general bicycle, not projected onto the constraints (so the
-    height and the contact velocities are not zero), within the thesis's working ranges."""
-    rng = np.random.default_rng(seed)
-    q = rng.uniform(-np.pi, np.pi, (n, 8))
-    q[:, :2] = rng.uniform(-10, 10, (n, 2))
-    q[:, 3] = rng.uniform(-1.3, 1.3, n)          # roll short of the fall
-    q[:, 5] = rng.uniform(-0.6, 0.6, n)          # frame pitch
-    q[:, 6] = rng.uniform(-1.5, 1.5, n)          # steer
-    return q, rng.uniform(-20, 20, (n, 8))
 
 
 @pytest.fixture(scope="module")
@@ -132,7 +76,7 @@ def run(general, state, tmp_path_factory):
             build.add_sensors(mbs)
             mbs.Assemble()
             before = build.read(mbs, q0)
-            _solve(mbs, _settings(STEPS))
+            solve(mbs, settings(STEPS))
             after = build.read(mbs, q0)
         files = sorted(p.name for p in folder.rglob("*"))
     finally:
@@ -218,7 +162,7 @@ def test_markers_are_the_joint_origins_in_body_axes_and_the_ground_origin(genera
     markers are: where a position-dependent load would act)."""
     mbs, build = run["mbs"], run["build"]
     q0, _ = state
-    pts, A = general.points(q0), _rotations(q0)
+    pts, A = general.points(q0), rotations(q0)
     ovt = exu.OutputVariableType
     expected = {"rear": (pts["rG2"], A[2]), "frame": (pts["rG2"], A[3]), "fork": (pts["rA"], A[4]),
                 "front": (pts["rG5"], A[5]), "frame_com": (pts["rG3"], A[3])}
@@ -269,7 +213,7 @@ def test_the_user_functions_give_the_reference_rows_in_exudyns_calling_conventio
     relative to the rows' size; dq up to 20 rad/s makes the velocities ~10 m/s). Fails when
     the velocity-level branch returns the height or drops q_t, or a row or shape is wrong."""
     uc = ThesisFrontContact(general.params)
-    qs, dqs = _general_states(10, seed=31)
+    qs, dqs, _ = random_states(10, seed=31)
     for q, dq in zip(qs, dqs):
         D = general.constraint_jacobian(q)
         C = general.constraint_residual(q, dq)
@@ -314,7 +258,7 @@ def test_an_index2_run_asks_the_heights_time_derivative_and_holds_the_height(
         build = TreeBuild(mbs, general.params, q0, dq0, contact="thesis")
         build.add_sensors(mbs)
         mbs.Assemble()
-        _solve(mbs, _settings(STEPS), solver="TrapezoidalIndex2")
+        solve(mbs, settings(STEPS), solver="TrapezoidalIndex2")
     assert levels and all(levels)
     t, q, dq = build.read(mbs, q0)
     assert t.size == STEPS + 1
@@ -335,7 +279,7 @@ def test_calls_counts_every_evaluation_and_the_last_q_is_cached(general):
     instead of incremented, or the cache is never filled (every call recomputes)."""
     uc = ThesisFrontContact(general.params)
     assert uc.calls == 0
-    (qa, qb), (dqa, _) = _general_states(2, seed=32)
+    (qa, qb), (dqa, _), _ = random_states(2, seed=32)
     a = (None, 0.0, 0, list(qa), list(dqa))
     J_height = uc.height_jacobian(*a, False)
     J_velocity = uc.velocity_jacobian(*a, False)
@@ -359,7 +303,7 @@ def test_jacobian_check_reports_each_rows_difference(general):
     round-off. Expected: the planted amounts. Fails when the check leaves the height, the
     height row or the velocity rows out of its maximum (a wrong row would then pass)."""
     uc = ThesisFrontContact(general.params)
-    q = _general_states(1, seed=33)[0][0]
+    q = random_states(1, seed=33)[0][0]
     assert uc.jacobian_check(q) < ROUND_OFF
     h, J_height, J_velocity, J_1x8 = (np.copy(x) for x in uc._rows(q))
     e_gamma = np.eye(8)[6]
@@ -413,7 +357,7 @@ def test_a_run_that_fails_at_its_first_step_reads_back_its_start(general, state)
         build.add_sensors(mbs)
         mbs.Assemble()
         with pytest.raises(exu.SolverError):
-            _solve(mbs, _settings(STEPS, newton_tolerance=1e-300, newton_iterations=1))
+            solve(mbs, settings(STEPS, newton_tolerance=1e-300, newton_iterations=1))
     t, q, dq = build.read(mbs, q0)
     np.testing.assert_array_equal(t, [0.0])
     np.testing.assert_array_equal(q, [q0])
@@ -462,7 +406,7 @@ def test_the_mass_matrix_helper_writes_no_file_and_prints_nothing(general, tmp_p
     static solver's verbosity is switched on."""
     monkeypatch.chdir(tmp_path)
     capfd.readouterr()
-    q = _general_states(1, seed=34)[0][0]
+    q = random_states(1, seed=34)[0][0]
     M = TreeMassMatrix(general.params)(q)
     out, err = capfd.readouterr()
     assert (out, err) == ("", "")

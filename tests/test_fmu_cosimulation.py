@@ -564,14 +564,9 @@ def test_t_end_cuts_the_grid_and_other_options_are_refused(engine):
         engine.simulate(sc, rtol=1e-9, atol=1e-12)
 
 
-@pytest.mark.parametrize("mirror", [False, True], ids=["theta>0", "theta<0"])
-def test_the_master_stops_at_the_falls_grid_sample(engine, falling, monkeypatch, mirror):
-    """fmpy's master is asked to stop (its step_finished callback returns False) on the
-    communication step that lands on the run's last grid sample, the first past the limit,
-    and on no earlier step: nothing after the fall is computed. Read from the callback fmpy
-    calls, wrapped here. Fails when the stop is tested off the grid's samples, on another
-    sample, on another row of the recorder, or never (the run then goes on to 0.6 s)."""
-    import fmpy
+def _master_steps(monkeypatch) -> list:
+    """The (time, go on?) of each step_finished call fmpy's master makes, collected by
+    wrapping the callback the engine gives simulate_fmu."""
     calls = []
     real = fmpy.simulate_fmu
 
@@ -582,6 +577,17 @@ def test_the_master_stops_at_the_falls_grid_sample(engine, falling, monkeypatch,
             return go_on
         return real(*args, step_finished=wrapped, **kw)
     monkeypatch.setattr(fmpy, "simulate_fmu", spy)
+    return calls
+
+
+@pytest.mark.parametrize("mirror", [False, True], ids=["theta>0", "theta<0"])
+def test_the_master_stops_at_the_falls_grid_sample(engine, falling, monkeypatch, mirror):
+    """fmpy's master is asked to stop (its step_finished callback returns False) on the
+    communication step that lands on the run's last grid sample, the first past the limit,
+    and on no earlier step: nothing after the fall is computed. Read from the callback fmpy
+    calls, wrapped here. Fails when the stop is tested off the grid's samples, on another
+    sample, on another row of the recorder, or never (the run then goes on to 0.6 s)."""
+    calls = _master_steps(monkeypatch)
     sc = _mirrored(falling) if mirror else falling
     got = engine.simulate(sc, fall_limit=0.3)
     assert got.status == "fell"
@@ -633,17 +639,7 @@ def test_a_grid_from_a_later_start_stops_on_its_own_samples(engine, falling, mon
     """The falling scenario's grid shifted to start at 0.105 s (its samples 0.105 + k 0.01): the
     master's stop lands on the run's last sample, a time of that grid, not of a grid from 0
     (the sample index is counted from the run's start)."""
-    import fmpy
-    calls = []
-    real = fmpy.simulate_fmu
-
-    def spy(*args, step_finished=None, **kw):
-        def wrapped(now, recorder):
-            go_on = step_finished(now, recorder)
-            calls.append((now, go_on))
-            return go_on
-        return real(*args, step_finished=wrapped, **kw)
-    monkeypatch.setattr(fmpy, "simulate_fmu", spy)
+    calls = _master_steps(monkeypatch)
     sc = dataclasses.replace(falling, grid=(0.105, 0.01, 60))
     got = engine.simulate(sc, fall_limit=0.3)
     assert got.status == "fell"
