@@ -38,9 +38,9 @@ survivors left to kill. mutmut runs each mutant only against the tests that exec
 function in its first run, which misses what a module- or session-scoped fixture built for
 many tests; so each of mutmut's survivors is run once more, applied alone to the scratch copy,
 against the module's whole selection (``--no-rerun`` skips it), and counted as killed if a test
-fails there. Counting: tried = killed + survived + timeouts + suspicious (mutants no
-selected test reaches are counted apart, as 'not reached'); a timeout counts as killed, as
-mutmut counts it.
+fails there. Counting: tried = killed + survived + suspicious + not reached (timeouts are in
+killed, as mutmut counts them); a mutant that no selected test reaches is shown apart, as 'not
+reached', and counts as not killed: no test could catch it.
 """
 
 from __future__ import annotations
@@ -103,7 +103,8 @@ class Result:
 
     @property
     def tried(self) -> int:
-        return self.killed + len(self.survived) + self.suspicious
+        """Every mutant of the module: the ones no selected test reaches are not killed."""
+        return self.killed + len(self.survived) + self.suspicious + self.not_reached
 
     @property
     def text_only(self) -> tuple[str, ...]:
