@@ -623,12 +623,59 @@ def table(results: Path = RESULTS, readings_path: Path = READINGS) -> str:
     return text
 
 
+def equivalents_list(root: Path = ROOT) -> str:
+    """The equivalent mutants of ``tests/mutation_equivalents.toml`` as markdown, module by
+    module (sorted), each mutant by its name within the module, with its reason."""
+    path = root / "tests" / "mutation_equivalents.toml"
+    listed = tomllib.loads(path.read_text("utf-8")) if path.is_file() else {}
+    lines = [f"{sum(len(v) for v in listed.values())} equivalent mutants in "
+             f"{len(listed)} modules, each with the reason it cannot change what a user or "
+             "caller relies on (`tests/mutation_equivalents.toml`):", ""]
+    for module in sorted(listed):
+        prefix = module.removesuffix(".py").replace("/", ".") + "."
+        lines.append(f"- `{module}` ({len(listed[module])})")
+        for name, reason in listed[module].items():
+            short = name.removeprefix(prefix)
+            lines.append(f"  - `{short}`: {' '.join(reason.split())}")
+    return "\n".join(lines) + "\n"
+
+
+#: the README's generated blocks: marker -> the function writing the block
+README_BLOCKS = ("mutants-table", "mutants-equivalents")
+
+
+def readme_blocks(results: Path = RESULTS, readings_path: Path = READINGS,
+                  root: Path = ROOT) -> dict[str, str]:
+    """What the README's generated blocks hold: the table, and the equivalents' list folded
+    in a ``<details>`` element."""
+    return {"mutants-table": table(results, readings_path),
+            "mutants-equivalents": ("<details><summary>The equivalent mutants, with their "
+                                    "reasons</summary>\n\n" + equivalents_list(root)
+                                    + "\n</details>\n")}
+
+
+def with_readme_blocks(text: str, blocks: dict[str, str]) -> str:
+    """``text`` (the README) with each block between ``<!-- NAME: ... -->`` and
+    ``<!-- /NAME -->`` replaced by ``blocks[NAME]``. A missing marker is a SystemExit naming
+    it."""
+    for name, body in blocks.items():
+        m = re.search(rf"(<!-- {name}:[^\n]*-->\n)(.*?)(<!-- /{name} -->)", text, re.S)
+        if m is None:
+            raise SystemExit(f"error: README.md has no '<!-- {name}: ... -->' ... "
+                             f"'<!-- /{name} -->' block; add the two markers where it belongs")
+        text = text[:m.start(2)] + body + text[m.end(2):]
+    return text
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="tests/mutation.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("modules", nargs="*", help="modules to measure (paths from the repository root)")
     ap.add_argument("--all", action="store_true",
                     help="every module of the set whose result is missing or stale")
     ap.add_argument("--table", action="store_true", help="print the per-module scores so far")
+    ap.add_argument("--readme", action="store_true",
+                    help="write the table and the list of equivalent mutants into README.md's "
+                         "generated blocks (a test checks they are current)")
     ap.add_argument("--list", action="store_true", help="print the set and each test selection")
     ap.add_argument("--survivors", metavar="MODULE",
                     help="print the surviving mutants of MODULE's last measurement, with their changes")
@@ -651,6 +698,16 @@ def main(argv=None) -> int:
         return 0
     if a.survivors:
         print(survivors(a.survivors, a.out, a.results), end="")
+        return 0
+    if a.readme:
+        readme = ROOT / "README.md"
+        text = readme.read_text("utf-8")
+        new = with_readme_blocks(text, readme_blocks(a.results))
+        if new != text:
+            tmp = readme.with_name(readme.name + ".tmp")
+            tmp.write_text(new, "utf-8")
+            os.replace(tmp, readme)
+        print(f"README.md: {'updated' if new != text else 'already current'}")
         return 0
     todo = list(a.modules)
     if a.all:

@@ -9,6 +9,8 @@ import fnmatch
 import tomllib
 from pathlib import Path
 
+import pytest
+
 import mutation
 
 pytest_plugins = ["pytester"]
@@ -518,3 +520,36 @@ def test_a_rerun_refuses_a_selection_that_fails_on_the_unmutated_copy(tmp_path):
                                          r"scratch copy .*: measure mod.py again$"):
         mutation.confirm("mod.py", names, ["test_mod.py"], scratch, bin_, progress=lambda *a: None)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "scratch"]
+
+
+# -- the README's generated blocks ---------------------------------------------------------
+
+def test_the_readme_holds_the_current_table_and_list_of_equivalents():
+    """README.md's table and list of equivalent mutants are what the committed results,
+    readings and equivalents give (`make mutants-readme` writes them). Planted: one committed
+    result's killed count raised by one, and one equivalent's reason reworded: each fails."""
+    readme = (mutation.ROOT / "README.md").read_text("utf-8")
+    assert mutation.with_readme_blocks(readme, mutation.readme_blocks()) == readme, (
+        "README.md's mutation table or equivalents list is out of date: run make mutants-readme")
+
+
+def test_the_equivalents_list_names_each_mutant_within_its_module_with_its_reason(tmp_path):
+    (tmp_path / "tests").mkdir()
+    (tmp_path / "tests" / "mutation_equivalents.toml").write_text(
+        '["engines/b.py"]\n"engines.b.x_f__mutmut_2" = "a default\\n  always overridden"\n'
+        '["engines/a.py"]\n"engines.a.xǁCǁm__mutmut_1" = "r1"\n"engines.a.x_g__mutmut_3" = "r3"\n')
+    assert mutation.equivalents_list(tmp_path).splitlines() == [
+        "3 equivalent mutants in 2 modules, each with the reason it cannot change what a user "
+        "or caller relies on (`tests/mutation_equivalents.toml`):", "",
+        "- `engines/a.py` (2)", "  - `xǁCǁm__mutmut_1`: r1", "  - `x_g__mutmut_3`: r3",
+        "- `engines/b.py` (1)", "  - `x_f__mutmut_2`: a default always overridden"]
+
+
+def test_readme_blocks_are_replaced_between_their_markers_and_a_missing_one_is_named():
+    text = ("intro\n<!-- mutants-table: note -->\nold\nrows\n<!-- /mutants-table -->\n"
+            "middle\n<!-- mutants-equivalents: x -->\n<!-- /mutants-equivalents -->\nend\n")
+    out = mutation.with_readme_blocks(text, {"mutants-table": "T\n", "mutants-equivalents": "E\n"})
+    assert out == ("intro\n<!-- mutants-table: note -->\nT\n<!-- /mutants-table -->\n"
+                   "middle\n<!-- mutants-equivalents: x -->\nE\n<!-- /mutants-equivalents -->\nend\n")
+    with pytest.raises(SystemExit, match=r"README.md has no '<!-- mutants-list: \.\.\. -->'"):
+        mutation.with_readme_blocks(text, {"mutants-list": "L\n"})
