@@ -143,12 +143,13 @@ class DartEngine(DifferenceEigenvalues, Engine):
             x = np.linalg.solve(A, b)
         except np.linalg.LinAlgError:
             return np.full(N_Q, np.nan), np.full(N_C, np.nan), 1
-        return x[:N_Q], x[N_Q:], 0 if np.isfinite(x).all() else 1
+        # a finite state whose solve overflows: 2, as the reference's kernel reports it
+        return x[:N_Q], x[N_Q:], 0 if np.isfinite(x).all() else 2
 
     def forward(self, q, dq, torques=(0.0, 0.0, 0.0), baumgarte=(0.0, 0.0)) -> ForwardResult:
         """[M D'; D 0][ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C] on DART's M, F, D
         and dD dq (the duck-typed method the reference's solvers call). Status per state: 0 ok,
-        1 singular, 2 non-finite state; never raises."""
+        1 singular, 2 the state or the result not finite; never raises."""
         a1, a2 = float(baumgarte[0]), float(baumgarte[1])
         q = np.asarray(q, dtype=float)
         single = q.ndim == 1
@@ -167,7 +168,7 @@ class DartEngine(DifferenceEigenvalues, Engine):
             k = int(np.flatnonzero(res.status)[0])
             raise ArithmeticError(f"engine 'dart': at state {k} " + (
                 "the constrained system is singular" if res.status[k] == 1
-                else "the state is not finite"))
+                else "the state or the result is not finite"))
         return res.ddq
 
     # -- scenarios ---------------------------------------------------------------------
