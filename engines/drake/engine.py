@@ -178,11 +178,12 @@ class DrakeEngine(DifferenceEigenvalues, Engine):
             x = np.linalg.solve(A, b)
         except np.linalg.LinAlgError:
             return np.full(N_Q, np.nan), np.full(N_C, np.nan), 1
-        return x[:N_Q], x[N_Q:], 0 if np.isfinite(x).all() else 1
+        # a finite state whose solve overflows: 2, as the reference's kernel reports it
+        return x[:N_Q], x[N_Q:], 0 if np.isfinite(x).all() else 2
 
     def forward(self, q, dq, torques=(0.0, 0.0, 0.0), baumgarte=(0.0, 0.0)) -> ForwardResult:
         """[M D'; D 0][ddq; lambda] = [F + S T; -dD dq - 2 a1 D dq - a2^2 C] on Drake's terms.
-        Status per state: 0 ok, 1 singular, 2 non-finite state (never raises)."""
+        Status per state: 0 ok, 1 singular, 2 the state or the result not finite (never raises)."""
         a1, a2 = (float(x) for x in baumgarte)
         q = np.asarray(q, dtype=float)
         single = q.ndim == 1
