@@ -18,16 +18,13 @@ import pytest
 
 from comparisons.judgments.terms import random_states
 from engines import EngineUsageError
+from engine_edge_checks import SINGULAR, close
 from reference_model import load_model
 
 dart = pytest.importorskip("dartpy")
 
 from engines.dart import DartEngine  # noqa: E402
 
-#: the flat bicycle (lean pi/2) with its frame pitched by pi/2: the thesis's constrained system
-#: is singular there (the reference's forward reports status 1) and the LU factorization of
-#: DART's 13 x 13 system meets an exactly zero pivot (np.linalg.solve raises)
-SINGULAR = np.array([0.0, 0.0, 0.0, np.pi / 2, 0.0, np.pi / 2, 0.0, 0.0])
 #: the reference's name of a term where it is not the engine's
 REFERENCE_NAME = {"gravity": "Qgrav"}
 
@@ -44,12 +41,6 @@ def states():
     """Three random states (large lean, steer near +-pi/2, fast rates), away from the
     constraints: C and D dq are not zero, so the Baumgarte terms count."""
     return random_states(3, seed=7)
-
-
-def _close(mine, theirs, rel):
-    mine, theirs = np.asarray(mine), np.asarray(theirs)
-    assert mine.shape == theirs.shape and mine.dtype == np.float64
-    assert np.abs(mine - theirs).max() <= rel * np.abs(theirs).max()
 
 
 @pytest.mark.parametrize("term, args, rel", [
@@ -69,7 +60,7 @@ def test_one_state_gives_the_terms_of_one_state(built, states, term, args, rel):
     as 8 states or 2)."""
     model, eng = built
     values = [getattr(states, a)[1] for a in args]
-    _close(getattr(eng, term)(*values), getattr(model, REFERENCE_NAME.get(term, term))(*values),
+    close(getattr(eng, term)(*values), getattr(model, REFERENCE_NAME.get(term, term))(*values),
            rel)
 
 
@@ -79,7 +70,7 @@ def test_s_on_a_batch_is_the_references_row_by_row(built, states):
     round-off (1e-12 of the largest entry: both are unit axes through Jacobians). Planted: S's
     row helper given None, no function, no state or the state twice."""
     model, eng = built
-    _close(eng.S(states.q), model.S(states.q), 1e-12)
+    close(eng.S(states.q), model.S(states.q), 1e-12)
 
 
 def test_forward_on_one_state_is_the_references_with_baumgarte_terms(built, states):
@@ -96,8 +87,8 @@ def test_forward_on_one_state_is_the_references_with_baumgarte_terms(built, stat
     res, ref = eng.forward(q, dq, T, baumgarte=(5.0, 7.0)), model.forward(q, dq, T, (5.0, 7.0))
     exact = model.forward(q, dq, T)
     assert np.abs(ref.ddq - exact.ddq).max() > 1.0          # the Baumgarte terms do count
-    _close(res.ddq, ref.ddq, 1e-9)
-    _close(res.lam, ref.lam, 1e-9)
+    close(res.ddq, ref.ddq, 1e-9)
+    close(res.lam, ref.lam, 1e-9)
     assert res.status.shape == (1,) and res.status[0] == 0 and ref.status[0] == 0
 
 
@@ -108,8 +99,8 @@ def test_forward_on_a_batch_gives_the_multipliers_row_by_row(built, states):
     model, eng = built
     res = eng.forward(states.q, states.dq, states.T, baumgarte=(0.5, 2.0))
     ref = model.forward(states.q, states.dq, states.T, (0.5, 2.0))
-    _close(res.ddq, ref.ddq, 1e-9)
-    _close(res.lam, ref.lam, 1e-9)
+    close(res.ddq, ref.ddq, 1e-9)
+    close(res.lam, ref.lam, 1e-9)
     assert res.lam.shape == (3, 5) and list(res.status) == [0, 0, 0]
 
 
@@ -145,7 +136,7 @@ def test_a_non_finite_state_is_status_2_with_nan_and_the_others_are_solved(built
     assert res.ddq.shape == (4, 8) and res.lam.shape == (4, 5)
     assert res.ddq.dtype == np.float64 and res.lam.dtype == np.float64
     assert np.isnan(res.ddq[1:]).all() and np.isnan(res.lam[1:]).all()
-    _close(res.ddq[0], ref.ddq[0], 1e-9)
+    close(res.ddq[0], ref.ddq[0], 1e-9)
 
 
 def test_the_singular_state_is_status_1_with_nan(built):

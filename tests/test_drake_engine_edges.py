@@ -18,16 +18,12 @@ import numpy as np
 import pytest
 
 from comparisons.judgments.terms import random_states
+from engine_edge_checks import SINGULAR, close
 from reference_model import load_model
 
 pytest.importorskip("pydrake")
 
 from engines.drake import DrakeEngine  # noqa: E402
-
-#: the flat bicycle (lean pi/2) with its frame pitched by pi/2: the thesis's constrained system
-#: is singular there (the reference's forward reports status 1) and the LU factorization of
-#: the engine's 13 x 13 KKT matrix meets an exactly zero pivot (np.linalg.solve raises)
-SINGULAR = np.array([0.0, 0.0, 0.0, np.pi / 2, 0.0, np.pi / 2, 0.0, 0.0])
 
 
 @pytest.fixture(scope="module")
@@ -44,12 +40,6 @@ def states():
     return random_states(3, seed=7)
 
 
-def _close(mine, theirs, rel):
-    mine, theirs = np.asarray(mine), np.asarray(theirs)
-    assert mine.shape == theirs.shape and mine.dtype == np.float64
-    assert np.abs(mine - theirs).max() <= rel * np.abs(theirs).max()
-
-
 def test_generalized_forces_of_one_state_with_torques_are_the_references(built, states):
     """Contract (docs/engines.md): generalized_forces(q (8,), dq (8,), torques (3,)) returns
     Qv + Qgrav + Qaero + S T of that state, (8,), the reference's to 1e-10 of the largest
@@ -59,7 +49,7 @@ def test_generalized_forces_of_one_state_with_torques_are_the_references(built, 
     the torques of the one state passed as the whole (1, 3) row block or as its second row."""
     model, eng = built
     for q, dq, T in zip(states.q, states.dq, states.T):
-        _close(eng.generalized_forces(q, dq, T), model.generalized_forces(q, dq, T), 1e-10)
+        close(eng.generalized_forces(q, dq, T), model.generalized_forces(q, dq, T), 1e-10)
 
 
 def test_forward_on_one_state_is_the_references_with_baumgarte_terms(built, states):
@@ -79,8 +69,8 @@ def test_forward_on_one_state_is_the_references_with_baumgarte_terms(built, stat
     res, ref = eng.forward(q, dq, T, baumgarte=(5.0, 7.0)), model.forward(q, dq, T, (5.0, 7.0))
     exact = model.forward(q, dq, T)
     assert np.abs(ref.ddq - exact.ddq).max() > 1.0          # the Baumgarte terms do count
-    _close(res.ddq, ref.ddq, 1e-9)
-    _close(res.lam, ref.lam, 1e-9)
+    close(res.ddq, ref.ddq, 1e-9)
+    close(res.lam, ref.lam, 1e-9)
     assert res.status.shape == (1,) and res.status[0] == 0 and ref.status[0] == 0
     assert res.status.dtype == ref.status.dtype == np.intc
 
@@ -92,8 +82,8 @@ def test_forward_on_a_batch_gives_the_multipliers_row_by_row(built, states):
     model, eng = built
     res = eng.forward(states.q, states.dq, states.T, baumgarte=(0.5, 2.0))
     ref = model.forward(states.q, states.dq, states.T, (0.5, 2.0))
-    _close(res.ddq, ref.ddq, 1e-9)
-    _close(res.lam, ref.lam, 1e-9)
+    close(res.ddq, ref.ddq, 1e-9)
+    close(res.lam, ref.lam, 1e-9)
     assert res.lam.shape == (3, 5) and list(res.status) == [0, 0, 0]
 
 
@@ -130,7 +120,7 @@ def test_a_non_finite_state_is_status_2_with_nan_and_the_others_are_solved(built
     assert res.ddq.shape == (4, 8) and res.lam.shape == (4, 5)
     assert res.ddq.dtype == np.float64 and res.lam.dtype == np.float64
     assert np.isnan(res.ddq[1:]).all() and np.isnan(res.lam[1:]).all()
-    _close(res.ddq[0], ref.ddq[0], 1e-9)
+    close(res.ddq[0], ref.ddq[0], 1e-9)
 
 
 def test_the_singular_state_is_status_1_with_nan(built):
