@@ -664,3 +664,99 @@ def test_a_long_error_line_is_cut_at_160_characters(engine, monkeypatch):
     monkeypatch.setattr(fmpy, "simulate_fmu", fail)
     sc = dataclasses.replace(get_scenario("stability-psid5"), grid=(0.0, 0.01, 11))
     assert engine.simulate(sc).message == PREFIX + "x" * 160
+
+
+# -- grids off zero, a lean in other units, a grid of one communication step ----------------
+
+def test_a_grid_starting_half_a_step_late_falls_at_its_own_sample(thesis, engine, falling,
+                                                                  monkeypatch):
+    """The falling scenario on a grid from t0 = 0.25 ms (half a communication step; its samples
+    t0 + k 0.01 s): the torques are constant and the equations do not hold t, so the reference's
+    run of this scenario locates the fall at t0 + 0.37935 s, between the fine steps
+    t0 + 0.3790 and t0 + 0.3795 s, and the run must end as a fall at the first grid sample past
+    it, t0 + 0.38 s, following the reference before it (`_check_fall`), with the master's one
+    stop on that sample. The sample index is counted from the grid's first time; counted from
+    -t0 instead (2 t0 = one fine step: every count one step late) the check falls on
+    t0 + 0.3795 s, past the fall but before the sample, so the master stops there and the run
+    loses its fall sample ('completed' at t0 + 0.37 s). (The 0.105 s and 0.2 s starts above
+    cannot show this: 2 t0 is a whole number of samples there.)
+    Planted: the sample index taken from now + t0 instead of now - t0."""
+    calls = _master_steps(monkeypatch)
+    sc = dataclasses.replace(falling, grid=(0.00025, 0.01, 61))
+    got = engine.simulate(sc, fall_limit=0.3)
+    ref = ReferenceEngine(thesis).simulate(sc, fall_limit=0.3)
+    _check_fall(got, ref, sc, 0.3)
+    assert got.t_end == pytest.approx(0.00025 + 0.38, abs=1e-12)
+    stops = [now for now, go_on in calls if not go_on]
+    assert len(stops) == 1 and stops[0] == pytest.approx(got.t[-1], abs=1e-12)
+
+
+def test_a_lean_mapped_in_degrees_falls_at_the_same_sample(thesis, cs_fmu, engine, falling,
+                                                           monkeypatch, tmp_path):
+    """The thesis FMU read through a mapping that puts its lean and lean rate in degrees
+    (docs/engines.md: SI = scale * FMU value, scale pi/180), with the run's initial state
+    (`initial_state`, replaced here) the falling scenario's projected start with theta and
+    theta_dot multiplied by pi/180: the start values, SI / scale, are then that projected start
+    itself, so the FMU computes the unscaled run (the plain mapping's, limit 0.3 rad), and the
+    lean in SI is its lean times pi/180. With the limit 0.3 pi/180 rad, |theta| * pi/180 reaches
+    it at exactly the samples where the unscaled run's |theta| reaches 0.3 rad: the run falls
+    at the same sample (0.38 s), its master stopping there, with the unscaled run's states
+    (theta times pi/180; 1e-10, the runs differ only by the start's rounding). The master's
+    stop reads the FMU's theta in SI (times the scale); read divided by it, the lean looks
+    3283 times larger, past the limit at the first sample, and the run stops at 0.01 s
+    'completed'. Planted: the master's fall check dividing theta by its scale."""
+    from reference_model.exports import fmu as fmu_export
+    deg = np.pi / 180
+    text = (fmu_export.mapping_text(thesis)
+            .replace('theta = "theta"', f'theta = {{ name = "theta", scale = {deg!r} }}')
+            .replace('theta = "d_theta"', f'theta = {{ name = "d_theta", scale = {deg!r} }}'))
+    assert text.count("{ name = ") == 2
+    (tmp_path / "degrees.toml").write_text(text)
+    eng = load_engine(SPEC, thesis, fmu=str(cs_fmu), mapping=str(tmp_path / "degrees.toml"),
+                      interface="cs")
+    plain = engine.simulate(falling, fall_limit=0.3)
+    assert plain.status == "fell" and plain.t_end == pytest.approx(0.38, abs=1e-12)
+    start = initial_state(thesis, falling)
+    q0, dq0 = start.q.copy(), start.dq.copy()
+    q0[THETA] *= deg
+    dq0[THETA] *= deg
+    monkeypatch.setattr(cosimulation, "initial_state",
+                        lambda model, scenario: SimpleNamespace(q=q0, dq=dq0))
+    calls = _master_steps(monkeypatch)
+    got = eng.simulate(falling, fall_limit=0.3 * deg)
+    assert got.status == "fell", got.message
+    assert np.array_equal(got.t, plain.t)
+    assert got.message == (f"|theta| reached the fall limit {0.3 * deg:.4f} rad by t = "
+                           f"{plain.t[-1]:.6f} s (first sample past it)")
+    scales = np.ones(8)
+    scales[THETA] = deg
+    assert np.max(np.abs(got.q - plain.q * scales)) < 1e-10
+    assert np.max(np.abs(got.dq - plain.dq * scales)) < 1e-10
+    stops = [now for now, go_on in calls if not go_on]
+    assert len(stops) == 1 and stops[0] == pytest.approx(plain.t[-1], abs=1e-12)
+
+
+def test_a_grid_of_one_communication_step_is_stepped_once_per_sample(thesis, engine,
+                                                                     monkeypatch):
+    """The replay (all three torques vary) on a grid of 0.5 ms = `COMMUNICATION_STEP`, 0.05 s:
+    the fewest equal steps of at most 0.5 ms is one per sample (the module's docstring: the
+    steps are the grid's divided down to at most that), so fmpy's master makes exactly one
+    communication step per grid interval, landing on the grid's times (its step_finished
+    calls, wrapped here), and holds each torque over 0.5 ms: the run follows the reference's
+    solver from the same start with the torques delayed by h/2 = 0.25 ms (the law used above;
+    measured 2.9e-9 in q and 7.5e-9 in dq, bound 3e-8 and 1e-7), whereas two steps of 0.25 ms
+    per sample hold the torques over half as long and land 4e-7 and 1.7e-5 away.
+    Planted: at least two communication steps per sample (max(2, ...))."""
+    calls = _master_steps(monkeypatch)
+    sc = dataclasses.replace(get_scenario("replay"), grid=(0.0, COMMUNICATION_STEP, 101))
+    got = engine.simulate(sc)
+    assert got.status == "completed", got.message
+    assert np.array_equal(got.t, sc.t)
+    assert len(calls) == 100
+    assert np.allclose([now for now, _ in calls], sc.t[1:], rtol=0, atol=1e-12)
+    spline = torque_input(thesis, sc)
+    init = initial_state(thesis, sc)
+    held = simulate(thesis, init.q, init.dq, sc.t, lambda t: spline(t - COMMUNICATION_STEP / 2),
+                    constraints="baumgarte", baumgarte=sc.baumgarte)
+    assert np.max(np.abs(got.q - held.q)) < 3e-8
+    assert np.max(np.abs(got.dq - held.dq)) < 1e-7
