@@ -155,6 +155,8 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
 
     rp = build_run_plant(model.params, settings)
     plant, ctx, mp = rp.plant, rp.context, rp.mapping
+    # the lean's place in Drake's q (the run's coordinates have zc after yc: mp.names)
+    i_theta = mp.q_index[mp.names.index("theta")]
     init = initial_state(model, scenario)
     torque = torque_input(model, scenario)
     torque_at = torque if callable(torque) else (lambda t, T=np.asarray(torque, float): T)
@@ -207,9 +209,9 @@ def simulate(engine, scenario: Scenario, **options) -> Trajectory:
             status = "failed"
             message = f"Drake's state became non-finite after t = {rows[-1][0]:.6f} s"
             break
-        theta = abs(x[mp.q_index[3]])
+        theta = abs(x[i_theta])
         if theta >= fall_limit:
-            th0 = abs(prev[0][mp.q_index[3]])
+            th0 = abs(prev[0][i_theta])
             s = min(max((fall_limit - th0) / (theta - th0), 0.0), 1.0) if theta > th0 else 1.0
             plant.SetPositions(ctx, prev[0] + s * (x - prev[0]))
             plant.SetVelocities(ctx, prev[1] + s * (plant.GetVelocities(ctx) - prev[1]))
