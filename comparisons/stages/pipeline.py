@@ -141,12 +141,22 @@ def select(scenarios: str | None, quick: bool, engines: str | None) -> Options:
 
 def _versions(modules=()) -> dict:
     """The versions of the core's packages and of the modules the engines declare they need
-    (``REQUIRES``): a module's distribution's version, else its ``__version__``."""
+    (``REQUIRES``): the version of the distribution named like the module, else of the one
+    that installs it (the module ``pydrake`` comes with the distribution ``drake``, which the
+    report called "not installed" while Drake ran), else the module's ``__version__``."""
     out = {"python": sys.version.split()[0]}
+    providers = None
     for pkg in ("numpy", "scipy", "sympy", "pandas", "matplotlib", *modules):
         try:
             out[pkg] = metadata.version(pkg)
+            continue
         except metadata.PackageNotFoundError:
+            pass
+        if providers is None:
+            providers = metadata.packages_distributions()
+        try:
+            out[pkg] = metadata.version(providers[pkg][0])
+        except (KeyError, IndexError, metadata.PackageNotFoundError):
             mod = sys.modules.get(pkg)
             out[pkg] = str(getattr(mod, "__version__", "not installed")) if mod else "not installed"
     return out
