@@ -20,9 +20,11 @@ Scenarios are cut to 20 ms (40 Drake steps of 5e-4 s, ~10-20 ms each run); the g
 t0 = 0.1 ms, off the step lattice, so that a grid read from its second sample or an interval
 summed instead of differenced shows.
 
-Not here: a fall. These tests found that the run read its fall test at the run mapping's index
-3, the heading phi (the run's coordinates have zc at index 2): fixed, and tested in
-tests/test_drake_fall.py.
+The fall: these tests found that the run read its fall test at the run mapping's index 3, the
+heading phi (the run's coordinates have zc at index 2): a leaning bicycle never fell on Drake
+and a heading past the limit did. Fixed; the last two tests hold it (the fall time against the
+reference engine's: Drake's compliant contact differs from the rolling constraint by about
+1 ms there, 5 ms allowed).
 """
 
 from __future__ import annotations
@@ -626,3 +628,37 @@ def test_the_runs_settings_record_what_determines_it(rolling, model):
         "ignored_options": [],
     }
     assert s == expected
+
+
+#: rad: the standing bicycle, leaned 0.196 rad, passes it at ~0.38 s
+FALL_LIMIT = 0.3
+
+
+def test_a_leaning_bicycle_falls_when_its_lean_reaches_the_limit(engine, model):
+    """stability-psid0 (standing still, leaned 0.196 rad) with a fall limit of 0.3 rad: status
+    'fell' within 5 ms of the reference's fall, the final row at |theta| = the limit (the step
+    that crossed it, interpolated: 1e-9) and every row before it below. Planted: the fall
+    tested on the heading (the run never falls: 'completed')."""
+    sc = dataclasses.replace(get_scenario("stability-psid0"), grid=(0.0, 0.01, 61))
+    from engines.reference import ReferenceEngine
+    ref = ReferenceEngine(model).simulate(sc, fall_limit=FALL_LIMIT)
+    run = engine.simulate(sc, fall_limit=FALL_LIMIT)
+    assert ref.status == "fell"
+    assert run.status == "fell", run.message
+    assert abs(run.t_end - ref.t_end) < 5e-3
+    assert abs(abs(run.q[-1, THETA]) - FALL_LIMIT) < 1e-9
+    assert np.abs(run.q[:-1, THETA]).max() < FALL_LIMIT
+    assert run.message == f"|theta| reached the fall limit {FALL_LIMIT:.4f} rad at t = {run.t_end:.6f} s"
+
+
+def test_a_heading_past_the_limit_is_not_a_fall(engine):
+    """The same bicycle rolling upright-ish (stability-psid10, lean 0.196 rad, well inside the
+    limit) started on a heading of 0.5 rad, past the 0.3 rad limit: heading is not lean, so the
+    50 ms run completes. Planted: the fall tested on the heading (it 'fell' at the first step)."""
+    base = get_scenario("stability-psid10")
+    q0 = list(base.q0)
+    q0[2] = 0.5              # phi, the heading
+    sc = dataclasses.replace(base, q0=tuple(q0), grid=(0.0, 0.01, 6))
+    run = engine.simulate(sc, fall_limit=FALL_LIMIT)
+    assert run.status == "completed", run.message
+    assert np.abs(run.q[:, THETA]).max() < FALL_LIMIT
