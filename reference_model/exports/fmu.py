@@ -49,7 +49,7 @@ from ..solvers import THESIS_BAUMGARTE, consistent_state
 from .text import float_text
 
 __all__ = ["FmuExportError", "MAPPING_FILE", "MODEL_IDENTIFIER", "TERM_BLOCKS", "CS_STEP",
-           "complex_source", "fmi_headers", "mapping_text", "model_description", "write_fmu"]
+           "binary_key", "complex_source", "fmi_headers", "mapping_text", "model_description", "write_fmu"]
 
 MODEL_IDENTIFIER = "bicycle_xval"
 MAPPING_FILE = "resources/bicycle-xval-mapping.toml"
@@ -290,15 +290,43 @@ def _compiler() -> tuple[str, ...]:
     return cc
 
 
+#: the compiler's flags after $CC (the source, the output and the include folders follow)
+_FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-fno-fast-math", "-fvisibility=default")
+
+
+def binary_key(build: Path, headers: Path, cc: tuple[str, ...]) -> str:
+    """The hash that names a compiled binary in the cache: the compiler command and its flags,
+    and the name and bytes of every source in ``build`` and every header in ``headers`` (what
+    the compiler reads; the folders' own paths, which are temporary, are left out)."""
+    h = hashlib.sha256(repr((cc, _FLAGS)).encode())
+    for folder in (build, headers):
+        for path in sorted(folder.glob("*.[ch]")):
+            h.update(f"\0{folder is build}:{path.name}\0".encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()
+
+
 def _compile(build: Path, headers: Path, cc: tuple[str, ...]) -> Path:
+    """The FMU's binary from the sources in ``build``: from the cache
+    (``<cache>/fmu-binaries/<binary_key>.so``) when the same compiler has compiled the same
+    sources before, else compiled now and cached (a read-only cache is only not written)."""
     so = build / f"{MODEL_IDENTIFIER}.so"
-    cmd = [*cc, "-O2", "-fPIC", "-shared", "-std=c99", "-fno-fast-math", "-fvisibility=default",
-           f"-I{headers}", f"-I{build}", "-o", str(so), str(build / "fmu_wrapper.c"), "-lm"]
+    cached = codegen.cache_root() / "fmu-binaries" / f"{binary_key(build, headers, cc)}.so"
+    if cached.is_file():
+        so.write_bytes(cached.read_bytes())
+        so.chmod(0o755)     # as the compiler leaves it
+        return so
+    cmd = [*cc, *_FLAGS, f"-I{headers}", f"-I{build}", "-o", str(so),
+           str(build / "fmu_wrapper.c"), "-lm"]
     res = subprocess.run(cmd, capture_output=True, text=True, errors="replace")
     if res.returncode != 0:
         last = [ln for ln in res.stderr.splitlines() if ln.strip()][-1:] or ["no message"]
         raise FmuExportError(f"C compiler {shlex.join(cc)!r} (CC) failed on the FMU wrapper: "
                              f"{last[0][:200]}; fix: set CC to a working C99 compiler")
+    try:
+        _write_atomically(cached, so.read_bytes())
+    except OSError:     # a read-only cache: the binary is built, only not kept
+        pass
     return so
 
 
