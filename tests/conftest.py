@@ -17,7 +17,8 @@ def pytest_configure(config):
     """Under mutmut only: in its stats run, credit each shared fixture's work to every test
     using it (tests/mutation_credit.py: otherwise its first test alone gets it) and record each
     test's seconds; in a mutant's run, run the cheapest test files first
-    (tests/mutation_order.py)."""
+    (tests/mutation_order.py), in a process group of its own with a wall-clock deadline
+    (tests/mutation_guard.py)."""
     import os
     mutant = os.environ.get("MUTANT_UNDER_TEST")
     if not mutant:
@@ -25,6 +26,9 @@ def pytest_configure(config):
     if mutant == "stats":
         from mutation_credit import register
         register(config)
+    elif mutant != "fail":   # a mutant's run: its own process group, a wall-clock deadline
+        from mutation_guard import register as register_guard
+        register_guard(config)
     from mutation_order import register as register_order
     register_order(config, mutant)
 

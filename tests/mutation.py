@@ -39,8 +39,10 @@ function in its first run, which misses what a module- or session-scoped fixture
 many tests; so each of mutmut's survivors is run once more, applied alone to the scratch copy,
 against the module's whole selection (``--no-rerun`` skips it), and counted as killed if a test
 fails there. Counting: tried = killed + survived + suspicious + not reached (timeouts are in
-killed, as mutmut counts them); a mutant that no selected test reaches is shown apart, as 'not
-reached', and counts as not killed: no test could catch it.
+killed, as mutmut counts them, and so is a test run that died by a signal, mutmut's
+'segfault': SIGSEGV, or the SIGKILL a mutant of the pool sends its own process group); a
+mutant that no selected test reaches is shown apart, as 'not reached', and counts as not
+killed: no test could catch it.
 """
 
 from __future__ import annotations
@@ -293,7 +295,8 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
                              text=True).stdout.split()[-1]
     res = Result(module=module, module_sha=_sha([module], root), tests_sha=_sha(tests, root),
                  tests=tuple(tests),
-                 killed=count("killed") + count("timeout") + len(rerun_killed),
+                 killed=(count("killed") + count("timeout") + count("segfault")
+                         + len(rerun_killed)),
                  timeouts=count("timeout"),
                  survived=tuple(survivors),
                  suspicious=count("suspicious"), not_reached=count("no tests"),
