@@ -66,3 +66,37 @@ def test_an_ignored_sigint_stays_ignored(sigint_restored):
         assert stop.signum is None
         stop.check()
     assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+
+
+def test_the_terminated_stop_names_its_signal(sigint_restored):
+    """SIGTERM's stop is `Terminated` saying what stopped the sweep (the message `run` and
+    `sweep` print: "terminated (SIGTERM)"). Planted: the message lost or changed."""
+    with deferred_signals("prog") as stop:
+        _deliver(signal.SIGTERM)
+        with pytest.raises(Terminated) as err:
+            stop.check()
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    assert str(err.value) == "terminated (SIGTERM)"
+
+
+@pytest.mark.parametrize("sig, word", [(signal.SIGINT, "interrupted"),
+                                       (signal.SIGTERM, "terminated")])
+def test_a_second_signal_writes_one_line_and_exits_with_the_shells_status(
+        sigint_restored, monkeypatch, sig, word):
+    """The second signal inside the block (module docstring): one line on standard error,
+    "<program>: <what> again; stopped at once", then the process ends at once with the status
+    a shell gives a process killed by that signal, 128 + its number (130 for Ctrl-C, 143 for
+    SIGTERM: POSIX shells' convention). os.write and os._exit are recorded, not done.
+    Planted: another descriptor than stderr; the status 128 - n or 129 + n; the line lost."""
+    written, exits = [], []
+    monkeypatch.setattr("comparisons.stages.sweep_signals.os.write",
+                        lambda fd, data: written.append((fd, data)))
+    monkeypatch.setattr("comparisons.stages.sweep_signals.os._exit", exits.append)
+    before = signal.getsignal(signal.SIGTERM)
+    with deferred_signals("prog") as stop:
+        _deliver(sig)
+        _deliver(sig)
+    signal.signal(signal.SIGTERM, before)
+    assert stop.signum == sig
+    assert written == [(2, f"prog: {word} again; stopped at once\n".encode())]
+    assert exits == [{signal.SIGINT: 130, signal.SIGTERM: 143}[sig]]
