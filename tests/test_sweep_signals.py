@@ -92,6 +92,7 @@ def test_a_second_signal_writes_one_line_and_exits_with_the_shells_status(
     monkeypatch.setattr("comparisons.stages.sweep_signals.os.write",
                         lambda fd, data: written.append((fd, data)))
     monkeypatch.setattr("comparisons.stages.sweep_signals.os._exit", exits.append)
+    signal.signal(signal.SIGINT, signal.default_int_handler)   # not left ignored by another test
     before = signal.getsignal(signal.SIGTERM)
     with deferred_signals("prog") as stop:
         _deliver(sig)
