@@ -49,7 +49,8 @@ TRAJECTORY_COSTS = {"replay": 2.4, "stability-psid10": 2.0}
 
 def convergence_steps(quick: bool, fixed=None) -> tuple[float, ...]:
     """The convergence study's steps in a quick or a full run: the engine's declared step times
-    the standard 1/2-spaced factors (1e-3 s: 4e-3 ... 5e-4 s, `DEFAULT_STEPS`)."""
+    the standard 1/2-spaced factors (for 1e-3 s: 5e-3, 2.5e-3, 1.25e-3, 6.25e-4 s,
+    `DEFAULT_STEPS`; twice those in a quick run)."""
     scale = 1.0 if fixed is None else fixed.step / 1e-3
     return tuple(h * scale for h in (QUICK_CONVERGENCE_STEPS if quick else DEFAULT_STEPS))
 
