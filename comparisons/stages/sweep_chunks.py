@@ -67,10 +67,13 @@ class ChunkStamp:
             return "it carries no chunk stamp"
         if found.get("hash") != self.hash:
             return f"it belongs to spec {found.get('hash')!r}, not {self.hash}"
-        if found.get("bicycles") != [self.start, self.stop] or found.get("rows") != len(self.bicycles):
+        if found.get("bicycles") != [self.start, self.stop]:
             b = found.get("bicycles")
             held = f"{b[0]}-{b[1] - 1}" if isinstance(b, list) and len(b) == 2 else repr(b)
             return f"it holds bicycles {held}, not {self.start}-{self.stop - 1}"
+        if found.get("rows") != len(self.bicycles):
+            return (f"it says {found.get('rows')!r} rows for bicycles {self.start}-"
+                    f"{self.stop - 1}, not {len(self.bicycles)}")
         return None
 
 
