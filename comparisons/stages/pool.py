@@ -348,7 +348,8 @@ def _exception(reply: _Reply) -> BaseException:
 
 def _wait(pool: _Workers, order: list[Task], limits: Limits | None, told: set,
           progress: Callable[[str], None]) -> float | None:
-    """Seconds until the next limit or slow-stage notice of a running task (None: no limits);
+    """Seconds until the next limit or slow-stage notice of a running task (None: no limits,
+    or none due, e.g. an infinite limit already past its notice: wait for the next reply);
     names, once, each running task already past its expected time."""
     if limits is None:
         return None
@@ -366,7 +367,9 @@ def _wait(pool: _Workers, order: list[Task], limits: Limits | None, told: set,
                 soonest = min(soonest, at - ran)
         if ran >= limits.budget(task):
             soonest = 0.0
-    return max(0.0, soonest) if soonest != float("inf") else 0.0
+    if soonest == float("inf"):   # nothing due: wait for a reply (none running: not at all)
+        return None if pool.busy else 0.0
+    return max(0.0, soonest)
 
 
 def _overdue(pool: _Workers, order: list[Task], limits: Limits | None) -> list[tuple]:
