@@ -31,7 +31,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from reference_model import load_model
 from reference_model.scenarios import get_scenario, torque_input
 
 pytest.importorskip("pydrake")
@@ -42,11 +41,10 @@ from pydrake.multibody.plant import PointPairContactInfo  # noqa: E402
 from pydrake.multibody.tree import MultibodyForces  # noqa: E402
 
 import engines.drake.run as drake_run  # noqa: E402
-from engines.drake import DrakeEngine  # noqa: E402
 from engines.drake.contact_plant import build_run_plant  # noqa: E402
 from engines.drake.options import RunSettings  # noqa: E402
 
-from test_drake_run import _loaded_scenario, _Spy  # noqa: E402
+from test_drake_run import _loaded_scenario, _Spy, engine, model  # noqa: E402,F401  (its fixtures)
 
 #: the grid's start (s), off the step lattice; Drake's default step (s); the output interval
 T0 = 1e-4
@@ -59,16 +57,6 @@ STEPS = 12
 
 def _replay(dt, n):
     return dataclasses.replace(get_scenario("replay"), grid=(T0, dt, n))
-
-
-@pytest.fixture(scope="module")
-def model():
-    return load_model("thesis-disc")
-
-
-@pytest.fixture(scope="module")
-def engine(model):
-    return DrakeEngine(model)
 
 
 @pytest.fixture(scope="module")

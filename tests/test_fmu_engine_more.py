@@ -35,19 +35,10 @@ from reference_model import load_model   # noqa: E402
 from reference_model.exports.fmu import mapping_text   # noqa: E402
 from reference_model.linearize import LinearizationError   # noqa: E402
 from reference_model.scenarios import get_scenario, torque_input   # noqa: E402
+from test_fmu_engine_edges import engine, thesis_fmu   # noqa: E402,F401  (its fixtures)
 
 #: docs/model.md's coordinate order
 XC, THETA = 0, 3
-
-
-@pytest.fixture(scope="module")
-def thesis_fmu(thesis):
-    return cached_fmu(thesis)
-
-
-@pytest.fixture(scope="module")
-def engine(thesis, thesis_fmu):
-    return FmuEngine(thesis, fmu=str(thesis_fmu))
 
 
 @pytest.fixture(scope="module")

@@ -785,13 +785,20 @@ def probe_modules(tmp_path, monkeypatch):
         "pool_edges_broken.py": "raise RuntimeError('broken library')\n",
         "pool_edges_last.py": "",
         "pool_edges_pkg/__init__.py": "", "pool_edges_pkg/sub.py": ""}
+    yield from modules_on_path(tmp_path, monkeypatch, files,
+                               lambda name: name.startswith("pool_edges_") or name == "z")
+
+
+def modules_on_path(tmp_path, monkeypatch, files: dict, ours):
+    """Write ``files`` (path: text) under ``tmp_path``, put it on sys.path for the test, and
+    forget every imported module ``ours(name)`` accepts after it (a fixture's body)."""
     for name, text in files.items():
         (tmp_path / name).parent.mkdir(exist_ok=True)
         (tmp_path / name).write_text(text)
     monkeypatch.syspath_prepend(str(tmp_path))
     yield
     for name in list(sys.modules):
-        if name.startswith("pool_edges_") or name == "z":
+        if ours(name):
             del sys.modules[name]
 
 

@@ -25,7 +25,7 @@ import pytest
 
 from comparisons.stages import pool
 from comparisons.stages.pool import Limits, Task, run_tasks
-from test_pool_edges import HANG, PATIENCE, _busy, _reaped, _recording_forks
+from test_pool_edges import HANG, PATIENCE, _busy, _reaped, _recording_forks, modules_on_path
 
 
 class Escapes(BaseException):
@@ -165,14 +165,8 @@ def broken_package(tmp_path, monkeypatch):
     files = {"pool_more_broken/__init__.py": "raise RuntimeError('broken package')\n",
              "pool_more_broken/sub.py": "", "pool_more_after.py": "",
              "pool_more_engine.py": "REQUIRES = ('pool_more_broken.sub', 'pool_more_after')\n"}
-    for name, text in files.items():
-        (tmp_path / name).parent.mkdir(exist_ok=True)
-        (tmp_path / name).write_text(text)
-    monkeypatch.syspath_prepend(str(tmp_path))
-    yield
-    for name in list(sys.modules):
-        if name.startswith("pool_more_"):
-            del sys.modules[name]
+    yield from modules_on_path(tmp_path, monkeypatch, files,
+                               lambda name: name.startswith("pool_more_"))
 
 
 def test_warm_imports_skips_a_library_whose_package_raises_and_goes_on(broken_package):
