@@ -442,12 +442,19 @@ def _now() -> str:
 
 def refresh(module: str, *, out: Path = ROOT / "build" / "mutation", results: Path = RESULTS,
             children: int = 2, progress=print, root: Path = ROOT,
-            venv_bin: Path | None = None) -> Result:
+            venv_bin: Path | None = None, added_only: bool = False) -> Result:
     """``module``'s result brought up to date with tests written after it: its survivors are
     run against the module's current selection (`confirm`, in the scratch copy the
     measurement left under ``out``), those killed move to ``killed_on_rerun``, and the result
     takes the selection's current hash. Sound when the module is unchanged and tests were only
-    added since (a test removed or weakened could let a killed mutant live: measure again)."""
+    added since (a test removed or weakened could let a killed mutant live: measure again).
+
+    ``added_only``: the survivors run against the selection's files that the measurement did
+    not have (and its pytest options) only: a kill there is a kill by the current selection,
+    and a survivor the files it had did not kill before is not run through them again (an
+    Engine's conformance files cost tens of seconds a survivor). A file of the old selection
+    edited since is not rerun: what it would kill now still counts as surviving (the score can
+    read low, never high)."""
     res = load_result(module, results)
     if res is None:
         raise SystemExit(f"error: {module} has not been measured; run "
@@ -459,6 +466,12 @@ def refresh(module: str, *, out: Path = ROOT / "build" / "mutation", results: Pa
     if not (scratch / "mutants").is_dir():
         raise SystemExit(f"error: the scratch copy {scratch} is gone; measure {module} again")
     tests = selection_for(module, root)
+    run = tests
+    if added_only:
+        run = [t for t in tests if t.startswith("-") or t not in res.tests]
+        if not any(not t.startswith("-") for t in run):
+            raise SystemExit(f"error: {module}: no test file was added to its selection since "
+                             f"its measurement; refresh it without --added-only")
     # the scratch copy takes the tests as they are now: tests/ whole (its helpers and data
     # too), and the selection's files elsewhere (the conformance suite)
     shutil.copytree(root / "tests", scratch / "tests", dirs_exist_ok=True,
@@ -468,7 +481,7 @@ def refresh(module: str, *, out: Path = ROOT / "build" / "mutation", results: Pa
             src, dst = root / t.split("::")[0], scratch / t.split("::")[0]
             dst.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(src, dst)
-    killed = confirm(module, list(res.survived), tests, scratch,
+    killed = confirm(module, list(res.survived), run, scratch,
                      venv_bin or Path(sys.executable).parent, progress, children)
     new = dataclasses.replace(
         res, tests_sha=_sha(tests, root), tests=tuple(tests), killed=res.killed + len(killed),
@@ -688,6 +701,9 @@ def main(argv=None) -> int:
     ap.add_argument("--refresh", metavar="MODULE", action="append", default=[],
                     help="run MODULE's survivors against its current selection (tests written "
                          "after its measurement); needs its scratch copy")
+    ap.add_argument("--added-only", action="store_true",
+                    help="with --refresh: run the survivors against the test files added to "
+                         "the selection since the measurement only (conservative, faster)")
     ap.add_argument("--out", type=Path, default=ROOT / "build" / "mutation",
                     help="scratch copies [build/mutation]")
     ap.add_argument("--results", type=Path, default=RESULTS,
@@ -721,7 +737,8 @@ def main(argv=None) -> int:
     if todo or a.refresh:
         with exclusive(a.out):
             for m in a.refresh:
-                refresh(m, out=a.out, results=a.results, children=a.children)
+                refresh(m, out=a.out, results=a.results, children=a.children,
+                        added_only=a.added_only)
             for i, m in enumerate(dict.fromkeys(todo), 1):
                 print(f"[{i}/{len(todo)}]", end=" ", flush=True)
                 measure(m, children=a.children, out=a.out, results=a.results,

@@ -412,6 +412,36 @@ def test_refresh_runs_the_survivors_against_the_tests_written_since(tmp_path):
     assert (scratch / "mod.py").read_text() == (root / "mod.py").read_text()
 
 
+def test_refresh_added_only_runs_the_files_added_since_and_not_the_old_ones(tmp_path):
+    """With ``added_only`` the survivors run against the files the measurement did not have:
+    the new test kills a - b as before, and the old file (which writes a marker when it runs)
+    is not run for any survivor; with no file added it refuses in one line. Planted: the whole
+    selection run (the marker appears); the filter inverted (the new file skipped, nothing
+    killed)."""
+    import pytest
+    root, scratch, names, bin_ = _refresh_tree(tmp_path)
+    marker = tmp_path / "old-ran"
+    (root / "tests" / "test_old.py").write_text(
+        f"def test_old():\n    open({str(marker)!r}, 'a').write('x')\n")
+    text = (root / "pyproject.toml").read_text()
+    (root / "pyproject.toml").write_text(text.replace(
+        '"mod.py" = ["tests/test_mod.py"]', '"mod.py" = ["tests/test_old.py", "tests/test_mod.py"]'))
+    results = tmp_path / "results"
+    kw = dict(out=tmp_path / "out", results=results, root=root, venv_bin=bin_, children=1,
+              progress=lambda *a: None, added_only=True)
+    mutation._save(_result("mod.py", root, survived=tuple(names), tests=("tests/test_old.py",)),
+                   results)
+    new = mutation.refresh("mod.py", **kw)
+    assert new.killed_on_rerun == (names[0],) and new.survived == (names[1],)
+    assert not marker.exists()
+    assert new.tests_sha == mutation._sha(["tests/test_old.py", "tests/test_mod.py"], root)
+    mutation._save(_result("mod.py", root, survived=(names[1],),
+                           tests=("tests/test_old.py", "tests/test_mod.py")), results)
+    with pytest.raises(SystemExit, match=r"^error: mod.py: no test file was added to its "
+                                         r"selection since its measurement"):
+        mutation.refresh("mod.py", **kw)
+
+
 def test_refresh_refuses_what_it_cannot_bring_up_to_date(tmp_path):
     """Not measured, the module changed since (its other mutants may differ), or the scratch
     copy gone: each one line saying to measure."""
