@@ -530,7 +530,9 @@ def test_an_invalid_bicycle_is_a_row_saying_why(params, monkeypatch, grid):
 
 def test_an_eigen_failure_is_a_failed_row_on_one_line(params, monkeypatch):
     """critical_speeds raising: 'eigen: Type: message' (whitespace collapsed), NaN speeds, status
-    failed. Planted: the message not made one line; split on ' ' only (newlines kept)."""
+    failed, and with the runs asked no run. Planted: the message not made one line; split on
+    ' ' only (newlines kept); the critical speeds None before the eigen check (the runs then
+    raise out of the row)."""
     def broken(model, speeds):
         raise ValueError("no\n   root   found")
     monkeypatch.setattr(eigenvalues, "critical_speeds", broken)
@@ -538,6 +540,12 @@ def test_an_eigen_failure_is_a_failed_row_on_one_line(params, monkeypatch):
     row = st.bicycle_row(spec, 0)
     assert (row["status"], row["failures"]) == ("failed", "eigen: ValueError: no root found")
     assert _nan(row["weave_speed"]) and _nan(row["capsize_speed"])
+    # with the runs asked too: no critical speed known, so no run and no verdict (still a row)
+    monkeypatch.setattr(st, "run_options", lambda s: {})
+    spec = make_spec(params, varies=["m3=85:85:1"], checks=("eigen", "runs"))
+    row = st.bicycle_row(spec, 0)
+    assert (row["status"], row["failures"]) == ("failed", "eigen: ValueError: no root found")
+    assert row["runs_confirmed"] is None
 
 
 def test_eigen_asks_the_speed_range_and_passes_the_found_speeds_to_the_runs(params, monkeypatch):
@@ -682,15 +690,21 @@ class FakeSetup:
 def fake_runs(monkeypatch):
     """Two fake setups (the reference and 'Fake') and a judgment that contradicts the weave run
     at 0.9 x on the reference only; records every judgment."""
-    judged = []
+    judged, judged_models = [], []
 
     def judge(model, mode, speed, traj):
         label, scenario = traj
         judged.append((mode, speed, label, scenario))
+        judged_models.append(model)
         planted = mode == "weave" and label == "reference" and abs(speed - 3.6) < 1e-12
         return {"passed": not planted}
     monkeypatch.setattr(stability, "judge_run", judge)
+    judge.models = judged_models
+    _FAKE_JUDGE.append(judge)
     return judged
+
+
+_FAKE_JUDGE: list = []     # the fake judgment of the current test (its models judged)
 
 
 def _model():
@@ -705,12 +719,14 @@ def test_runs_give_a_verdict_per_mode_factor_and_engine(fake_runs, monkeypatch):
     Planted: `ok &= passed` as `ok = passed` and as `ok |= passed`; the column's factor and
     mode swapped; the scenario at speed / factor; judged at factor x speed; the failures' 'x'
     dropped; the verdict words swapped; the scenario's R_front; built on the template; `break`
-    for `continue` after a failed run."""
+    for `continue` after a failed run; run_options(None); judge_run given no model."""
     setups = {"reference": FakeSetup("reference", fail_at=(5.4,)), "Fake": FakeSetup("Fake")}
-    monkeypatch.setattr(st, "run_options", lambda spec: setups)
+    monkeypatch.setattr(st, "run_options", lambda spec: {"spec": setups}[spec])
     row, failures = {}, []
     model = _model()
     ok = st._runs("spec", model, {"weave": 4.0, "capsize": 6.0}, row, failures)
+    # the runs' engines come from the spec's run options, each run judged on this model
+    assert _FAKE_JUDGE[-1].models and all(m is model for m in _FAKE_JUDGE[-1].models)
     assert ok is False and row["runs_confirmed"] is False
     assert row == {"run.weave.0.9.reference": "contradicted", "run.weave.0.9.Fake": "confirmed",
                    "run.weave.1.1.reference": "confirmed", "run.weave.1.1.Fake": "confirmed",
@@ -756,14 +772,18 @@ def test_run_columns_use_the_factor_as_g_and_match_columns(params, fake_runs, mo
     """With factors 1 and 2 the columns read run.<mode>.1.<engine> (format g, as `columns`
     writes them) and every column a run writes is one of the row's; the setups build the
     bicycle's model.
-    Planted: the factor formatted with str() in _runs (1.0); runs built on the template's model."""
+    Planted: the factor formatted with str() in _runs (1.0); runs built on the template's model;
+    _runs given None for the spec; a capsize speed not found kept as None."""
     log = []
     setups = {"reference": FakeSetup("reference", log=log)}
-    monkeypatch.setattr(stability, "FACTORS", (1.0, 2.0))
-    monkeypatch.setattr(st, "run_options", lambda spec: setups)
-    monkeypatch.setattr(eigenvalues, "critical_speeds", lambda model, v: (4.0, None))
     spec = make_spec(params, varies=["m3=80:80:1"], checks=("eigen", "runs"))
+    monkeypatch.setattr(stability, "FACTORS", (1.0, 2.0))
+    monkeypatch.setattr(st, "run_options", lambda s: setups if s is spec else pytest.fail(
+        f"run_options given {s!r}, not the spec"))
+    monkeypatch.setattr(eigenvalues, "critical_speeds", lambda model, v: (4.0, None))
     row = st.bicycle_row(spec, 0)
+    # no capsize speed in the range: NaN (the documented 'NaN where none'), not None
+    assert row["weave_speed"] == 4.0 and _nan(row["capsize_speed"])
     assert list(row) == st.columns(spec)
     assert row["run.weave.1.reference"] == row["run.weave.2.reference"] == "confirmed"
     assert row["runs_confirmed"] is True and row["status"] == "agree"
@@ -810,3 +830,37 @@ def test_template_loads_one_model_per_contact(monkeypatch):
     assert st._template("thesis") == "model thesis"
     assert st._template("thesis") == "model thesis"
     assert loaded == ["benchmark", "thesis"]
+
+
+def test_localize_is_given_the_failing_engines_only(params, files, monkeypatch):
+    """The localization explains the disagreeing engines (module docstring: 'for a bicycle that
+    disagrees: the failing entries and diagnose's best explanation'): of the reference (exact)
+    and the I5yy typo, localize gets the typo's engine alone, on the bicycle's model.
+    Planted: every engine counted as failing (ok_engine False from the start)."""
+    given = []
+
+    def localize(model, states, engines, tolerances=None):
+        given.append([type(e).__name__ for e in engines])
+        return SimpleNamespace(explanation=None)
+    monkeypatch.setattr(diagnose, "localize", localize)
+    spec = make_spec(params, varies=["m3=85:85:1"], checks=("terms",), n_states=2,
+                     engines=("reference", files["WheelTypo"]))
+    row = st.bicycle_row(spec, 0)
+    assert row["status"] == "disagree"
+    assert given == [["WheelTypo"]]
+
+
+def test_the_bicycles_model_is_built_on_its_contacts_template(params, monkeypatch):
+    """bicycle_row asks `_template` for the spec's contact ('disc' for the benchmark).
+    Planted: _template(None)."""
+    asked = []
+    real = st._template
+
+    def template(contact):
+        asked.append(contact)
+        return real(contact)
+    monkeypatch.setattr(st, "_template", template)
+    monkeypatch.setattr(eigenvalues, "critical_speeds", lambda model, v: (4.0, 6.0))
+    spec = make_spec(params, varies=["m3=85:85:1"], checks=("eigen",))
+    st.bicycle_row(spec, 0)
+    assert asked == [spec.contact] == ["disc"]
