@@ -52,6 +52,7 @@ import contextlib
 import dataclasses
 import datetime
 import fnmatch
+import functools
 import hashlib
 import json
 import os
@@ -335,6 +336,20 @@ def _function(tree, cls: str | None, name: str):
     return None
 
 
+def _parsed(path: Path):
+    """``path`` parsed by libcst, kept while the file is unchanged (its size and mtime): a
+    module's mutated file holds all its mutants (1 359 functions for the benchmark stage) and
+    took ~40 s to parse on the loaded 2-core machine, once for every survivor rerun."""
+    st = path.stat()
+    return _parse_file(str(path), st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=4)
+def _parse_file(path: str, mtime_ns: int, size: int):
+    import libcst as cst
+    return cst.parse_module(Path(path).read_text("utf-8"))
+
+
 def mutated_source(scratch: Path, module: str, name: str) -> str | None:
     """``module``'s source (in the scratch copy) with mutant ``name`` in place of the function
     or method it mutates, read from mutmut's mutated file (``scratch/mutants/<module>``); None
@@ -349,8 +364,8 @@ def mutated_source(scratch: Path, module: str, name: str) -> str | None:
     base = key.rsplit("__mutmut_", 1)[0]
     cls, func = (base.split("ǁ")[1:3] if base.startswith("xǁ") else (None, base[2:]))
     try:
-        orig = cst.parse_module((scratch / module).read_text("utf-8"))
-        mutants = cst.parse_module((scratch / "mutants" / module).read_text("utf-8"))
+        orig = _parsed(scratch / module)
+        mutants = _parsed(scratch / "mutants" / module)
     except (OSError, cst.ParserSyntaxError):
         return None
     target, mutant = _function(orig, cls, func), _function(mutants, cls, key)

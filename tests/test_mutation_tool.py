@@ -202,6 +202,33 @@ def test_a_methods_mutant_replaces_that_classs_method_only(tmp_path):
     assert mutation.mutated_source(scratch, "mod.py", "mod.xǁCǁ__init____mutmut_1") is None
 
 
+def test_mutated_source_parses_each_file_once_until_it_changes(tmp_path, monkeypatch):
+    """Three mutants of one module: the module and its mutated file are parsed once each (the
+    mutated file holds every mutant; parsing it per survivor cost ~40 s each on the benchmark
+    stage), and a mutated file rewritten since is parsed again, its new text used.
+    Planted: no cache (6 parses); a cache keyed by the path alone (the stale mutant)."""
+    import libcst
+    scratch = tmp_path / "s"
+    (scratch / "mutants").mkdir(parents=True)
+    (scratch / "mod.py").write_text("def f(v):\n    return v + 1\n")
+    mutated = scratch / "mutants" / "mod.py"
+    mutated.write_text("def x_f__mutmut_1(v):\n    return v - 1\n"
+                       "def x_f__mutmut_2(v):\n    return v * 1\n"
+                       "def x_f__mutmut_3(v):\n    return v + 2\n")
+    parses = []
+    real = libcst.parse_module
+    monkeypatch.setattr(libcst, "parse_module", lambda text: parses.append(1) or real(text))
+    mutation._parse_file.cache_clear()
+    got = [mutation.mutated_source(scratch, "mod.py", f"mod.x_f__mutmut_{i}") for i in (1, 2, 3)]
+    assert [g.splitlines()[1] for g in got] == ["    return v - 1", "    return v * 1",
+                                                 "    return v + 2"]
+    assert len(parses) == 2
+    mutated.write_text("def x_f__mutmut_1(v):\n    return v - 10\n")
+    assert mutation.mutated_source(scratch, "mod.py", "mod.x_f__mutmut_1").endswith(
+        "    return v - 10\n")
+    assert len(parses) == 3
+
+
 def test_a_second_measuring_run_on_the_same_out_stops_at_once(tmp_path):
     """Two runs sharing build/mutation's scratch copies spoiled a module's figures once: the
     second now stops with one line naming the holder, and the lock is free once the first
