@@ -947,3 +947,41 @@ def test_outside_the_main_thread_no_handler_is_touched(fake_distributed, handler
     t.join()
     assert "error" not in got, got.get("error")
     assert got["cluster"].seen["handlers"] == (handlers[signal.SIGINT], handlers[signal.SIGTERM])
+
+
+def test_each_unset_blas_variable_is_set_to_one_thread(fake_distributed, handlers, monkeypatch):
+    """The three libraries' variables each get "1" when unset and keep a value the user set:
+    OMP unset here (the other test keeps OMP_NUM_THREADS=4), OPENBLAS set to 3.
+    Planted: the OpenMP variable's name changed (OMP_NUM_THREADS left unset)."""
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "3")
+    _, cluster = sweep._client(None, 1, True)
+    assert cluster.seen["env"] == {"OPENBLAS_NUM_THREADS": "3", "OMP_NUM_THREADS": "1",
+                                   "MKL_NUM_THREADS": "1"}
+
+
+def test_a_handler_installed_outside_python_is_given_back_as_the_default(fake_distributed,
+                                                                         monkeypatch):
+    """signal.signal returns None for a handler not installed from Python (the Python docs):
+    such a handler cannot be set back, so the default action is restored, not None (which
+    signal.signal refuses with a TypeError). Planted: the None test always true."""
+    calls = []
+
+    def fake_signal(signum, handler):
+        calls.append((signum, handler))
+        if handler is None:
+            raise TypeError("signal handler must be signal.SIG_IGN, signal.SIG_DFL, or a callable object")
+        return None
+    monkeypatch.setattr(signal, "signal", fake_signal)
+    sweep._client(None, 1, True)
+    assert calls == [(signal.SIGINT, signal.SIG_IGN), (signal.SIGTERM, signal.SIG_IGN),
+                     (signal.SIGINT, signal.SIG_DFL), (signal.SIGTERM, signal.SIG_DFL)]
+
+
+def test_a_local_cluster_is_of_processes_by_default(spec, tmp_path, own_cluster, fake_compute,
+                                                    lines):
+    """run_sweep without ``processes`` starts its own cluster of worker processes: docs/sweep.md
+    counts on them (a frozen engine's worker process is restarted through its nanny, which a
+    cluster of threads has not). Planted: processes=False as the default."""
+    run_sweep(spec, tmp_path, progress=False, notify=lines.append)
+    assert own_cluster.calls == [(None, None, True)]
