@@ -77,6 +77,17 @@ class TwoArgs(Exception):
         super().__init__(a)
 
 
+@pytest.fixture(autouse=True)
+def _two_args_pickled_plainly(monkeypatch):
+    """TwoArgs as Python pickles it: importing Dask's distributed (another test file of the same
+    pytest worker may) runs tblib's ``pickling_support.install()``, which registers a reducer in
+    copyreg's table for every exception class then defined, and that reducer rebuilds TwoArgs
+    without calling its __init__: it would then unpickle, and the tests below would no longer
+    see an exception that does not."""
+    import copyreg
+    monkeypatch.delitem(copyreg.dispatch_table, TwoArgs, raising=False)
+
+
 def _raise_two_args():
     raise TwoArgs("half of it", "the other half")
 
