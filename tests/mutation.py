@@ -313,16 +313,16 @@ def measure(module: str, *, children: int = 2, out: Path = ROOT / "build" / "mut
     return res
 
 
-def _diffs(venv_bin: Path, scratch: Path, names, module: str | None = None
-           ) -> dict[str, list[str]]:
+def _diffs(venv_bin: Path, scratch: Path, names, module: str) -> dict[str, list[str]]:
     """Each mutant's changed lines: the module's source against `mutated_source` (its mutated
-    file parsed once), else from ``mutmut show`` in its scratch copy (a process that parses
-    that file again: ~5 s a survivor, 40 min for Exudyn's engine's 489)."""
+    file parsed once), else (a mutant it does not find) from ``mutmut show`` in the scratch
+    copy, a process that parses that file again (~5 s a survivor, 40 min for Exudyn's
+    engine's 489)."""
     import difflib
     out = {}
-    orig = (scratch / module).read_text("utf-8").splitlines() if module else None
+    orig = (scratch / module).read_text("utf-8").splitlines()
     for name in names:
-        text = mutated_source(scratch, module, name) if module else None
+        text = mutated_source(scratch, module, name)
         if text is not None:
             shown = list(difflib.unified_diff(orig, text.splitlines(), lineterm="", n=0))
         else:
