@@ -109,7 +109,7 @@ def _start_state(model: Model) -> np.ndarray:
     """Upright straight running: rear wheel rolling at 4 m/s, every constraint satisfied."""
     q = np.zeros(8)
     dq = np.zeros(8)
-    dq[6] = 4.0 / model.params.R_rear
+    dq[4] = 4.0 / model.params.R_rear          # psi_dot, the rear wheel rotation rate
     s = consistent_state(model, q, dq)
     return np.concatenate([s.q, s.dq])
 
