@@ -42,6 +42,7 @@ import pytest
 fmpy = pytest.importorskip("fmpy")
 
 from engines.fmu.mapping import parse_mapping   # noqa: E402
+from fmu_builds import cached_fmu   # noqa: E402
 from reference_model.exports import fmu as fmu_export   # noqa: E402
 from reference_model.exports.fmu import FmuExportError   # noqa: E402
 from reference_model.parameters.schema import (PARAMETER_DESCRIPTIONS,   # noqa: E402
@@ -95,7 +96,7 @@ class Built:
 @pytest.fixture(scope="module")
 def built(thesis, tmp_path_factory):
     folder = tmp_path_factory.mktemp("fmus")
-    me = fmu_export.write_fmu(thesis, folder / "thesis.fmu")
+    me = cached_fmu(thesis)             # the defaults: the FMU the other FMU tests share
     cs = fmu_export.write_fmu(thesis, folder / "thesis-cs.fmu", CS_BAUMGARTE, co_simulation=True,
                               directional_derivatives=False)
     return {"me": Built(me, (10.0, 10.0)), "cs": Built(cs, CS_BAUMGARTE)}
