@@ -268,6 +268,10 @@ class _RhsFailure(Exception):
         self.t, self.status = t, status
 
 
+class _NonFiniteStart(Exception):
+    """The start, once projected, is not finite: a failed run (DOP853 refuses such a start)."""
+
+
 TorqueInput = Callable[[float], np.ndarray]
 
 
@@ -334,6 +338,8 @@ def simulate(model: Model, q0, dq0, t_eval, torques=(0.0, 0.0, 0.0), *,
         if constraints == "projection":
             q, dq = project_state(model, y0[:N_Q], y0[N_Q:])
             y0 = np.concatenate([q, dq])
+            if not np.all(np.isfinite(y0)):     # DOP853 would refuse it with a ValueError
+                raise _NonFiniteStart("the projected initial state is not finite")
         # Baumgarte makes the velocity rows decay at 2 a1 + a2^2 (120/s for the thesis's 10, 10):
         # near an equilibrium the error estimate vanishes and DOP853 would step far outside its
         # stability region (|h lambda| <~ 6), amplifying round-off on the dense output; bound h.
@@ -379,8 +385,10 @@ def simulate(model: Model, q0, dq0, t_eval, torques=(0.0, 0.0, 0.0), *,
         status = "failed"
         reason = {1: "singular constraint/mass system", 2: "non-finite state"}.get(exc.status, "?")
         message = f"right-hand side failed at t = {exc.t:.6f} s: {reason}"
-    except ArithmeticError as exc:  # ConstraintSolveError, LinAlgError in the projection
-        status, message = "failed", f"constraint projection failed: {exc}"
+    except _NonFiniteStart as exc:
+        status, message = "failed", str(exc)
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:  # ConstraintSolveError; numpy's
+        status, message = "failed", f"constraint projection failed: {exc}"  # solves (ValueError)
     t_arr = np.asarray(out_t)
     Y = np.asarray(out_y).reshape(-1, 2 * N_Q)
     good = np.all(np.isfinite(Y), axis=1)
