@@ -535,11 +535,18 @@ def capsize_speed(model: ParametrizedModel, speeds: tuple[float, float] | None =
     grid = _grid((low, speeds[1]), step)
     det = _capsize_function(model)
     values = np.array([det(s) for s in grid])
-    hits = np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)
+    sign = np.sign(values)
+    # a sign change between two samples, or a root exactly on a sample that the determinant
+    # crosses (a zero that keeps its sign on both sides is no crossing)
+    crossed = sign[:-1] * sign[1:] < 0
+    crossed[:-1] |= (sign[1:-1] == 0) & (sign[:-2] * sign[2:] < 0)
+    hits = np.flatnonzero(crossed)
     if hits.size == 0:
         raise CriticalSpeedError(
             f"model {model.params.name!r}: no capsize speed in [{grid[0]:g}, {grid[-1]:g}] m/s "
             "(no real eigenvalue crosses zero); widen the range")
     i = int(hits[0])
+    if values[i + 1] == 0.0:
+        return float(grid[i + 1])
     return float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps,
                         maxiter=200))
