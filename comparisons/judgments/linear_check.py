@@ -124,7 +124,9 @@ def linear_benchmark_check(model, tolerances: Mapping[str, Tolerance],
     try:
         table1 = to_benchmark(model.params)
     except ParameterError as exc:
-        why = exc.problem.split("counterpart: ", 1)[-1]
+        # the reason follows the *last* lead-in: the model's name, a free string, comes
+        # before it and may hold the same words
+        why = exc.problem.rsplit("counterpart: ", 1)[-1]
         return LinearCheck(model.name, f"no benchmark counterpart: {why}", note, rng)
     cf = closed_form(table1)
     lin = linearize(model, 0.0)
