@@ -130,16 +130,20 @@ def judge_outcome(scenario: str, speed: float, traj: Trajectory, engine: str) ->
         grows = env.rate > 0
         ok = bool(np.isfinite(env.rate) and grows == (expected == "weave grows")
                   and traj.status == "completed")
+        # a run that ends (falls, fails) before the envelope's window has no peak to quote
+        peaks = (f"{env.peaks[0]:.3g} -> {env.peaks[-1]:.3g} rad/s" if env.peaks.size
+                 else "none to measure")
         return Outcome(scenario, engine, expected, env.rate, ok,
                        f"{env.peaks.size} peaks of |dtheta/dt| from {env.t_from:g} s: "
-                       f"{env.peaks[0]:.3g} -> {env.peaks[-1]:.3g} rad/s, envelope rate "
+                       f"{peaks}, envelope rate "
                        f"{env.rate:+.4f} /s; {traj.status} at {traj.t_end:.2f} s")
     cm = capsize_measure(traj)
-    slow = cm.rate * (traj.t_end - traj.t[0]) < 1.0
+    duration = traj.t_end - traj.t[0]
+    slow = cm.rate * duration < 1.0
     ok = bool(cm.monotone and cm.rate > 0 and slow and cm.status == "completed")
     return Outcome(scenario, engine, expected, cm.rate, ok,
                    f"from {cm.t_from:g} s theta {'keeps one sign and grows monotonically' if cm.monotone else 'is NOT monotone'}"
-                   f", rate of log|theta| {cm.rate:+.4f} /s (x{np.exp(cm.rate * traj.t_end):.2f} "
+                   f", rate of log|theta| {cm.rate:+.4f} /s (x{np.exp(cm.rate * duration):.2f} "
                    f"over the run), theta({traj.t_end:.2f} s) = {cm.theta_end:+.4f} rad; {cm.status}")
 
 
@@ -155,8 +159,8 @@ def identify_eigenvalues(traj: Trajectory, coords: Sequence[str] = ("theta", "ga
     the time spanned (n/2 samples), not on their number: the deviations from the linear
     eigenvalues on the 0.04 s grid equal those on the 0.01 s grid to a few per cent, and the SVD
     of a 126 x 64 matrix stays cheap (a 502 x 251 one took up to seconds with multi-threaded
-    BLAS on a loaded 2-core machine). Sorted: complex with +imag first, then by decreasing
-    real part."""
+    BLAS on a loaded 2-core machine). Sorted by decreasing imaginary part (a complex pair's
+    +imag member first, its conjugate last), equal ones by decreasing real part."""
     t = np.asarray(traj.t)
     dt = float(t[1] - t[0])
     if np.abs(np.diff(t) - dt).max() > 1e-9 * dt:
