@@ -288,3 +288,25 @@ def test_the_capsize_growth_factor_is_over_the_runs_own_duration():
     theta = 1e-3 * np.exp(0.15 * t)
     o = judge_outcome("s", 8.0, _traj(t, theta, 0.15 * theta), "e")
     assert f"(x{np.exp(0.9):.2f} over the run)" in o.evidence
+
+
+def test_each_channel_gives_a_hankel_matrix_of_half_the_samples_plus_one_columns(monkeypatch):
+    """The docstring: each channel (n samples once thinned) gives a Hankel matrix of n/2 + 1
+    columns, stacked before the SVD. On exact sums of exponentials any window returns the
+    exponents, so the shape is what the contract fixes: 40 samples on two channels are two
+    20 x 21 blocks, a 40 x 21 matrix whose rows are the channels' windows in order. Planted:
+    a window of n/2 + 2 columns (38 x 22)."""
+    seen = []
+    svd = np.linalg.svd
+
+    def spy(a, *args, **kwargs):
+        seen.append(np.array(a))
+        return svd(a, *args, **kwargs)
+
+    monkeypatch.setattr(np.linalg, "svd", spy)
+    run = _table2_run(_grid(40, step=0.04))
+    identify_eigenvalues(run, sample=0.04)
+    (a,) = seen
+    assert a.shape == (40, 21)
+    theta = run.q[:, THETA] / np.abs(run.q[:, THETA]).max()
+    assert np.array_equal(a[0], theta[:21]) and np.array_equal(a[19], theta[19:40])
