@@ -56,7 +56,9 @@ class TorqueSamples:
     source: str = ""
 
     def function(self):
-        """t -> (3,) torques (or (N, 3) for an array of times)."""
+        """t -> (3,) torques (or (N, 3) for an array of times). Outside the samples (a run
+        never asks there: a scenario file's samples cover it) "linear" and "previous" give the
+        nearest end sample and "cubic" continues its end pieces."""
         t, T = np.asarray(self.t), np.asarray(self.T)
         if self.interpolation == "cubic":
             from scipy.interpolate import CubicSpline
