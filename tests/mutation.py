@@ -470,8 +470,10 @@ def refresh(module: str, *, out: Path = ROOT / "build" / "mutation", results: Pa
     """``module``'s result brought up to date with tests written after it: its survivors are
     run against the module's current selection (`confirm`, in the scratch copy the
     measurement left under ``out``), those killed move to ``killed_on_rerun``, and the result
-    takes the selection's current hash. Sound when the module is unchanged and tests were only
-    added since (a test removed or weakened could let a killed mutant live: measure again).
+    takes the selection's current hash. The mutants no test reached run too (when the scratch
+    copy's ``.meta`` names them all): those killed now count as killed; the rest stay not
+    reached. Sound when the module is unchanged and tests were only added since (a test
+    removed or weakened could let a killed mutant live: measure again).
 
     ``added_only``: the survivors run against the selection's files that the measurement did
     not have (and its pytest options) only: a kill there is a kill by the current selection,
@@ -505,16 +507,33 @@ def refresh(module: str, *, out: Path = ROOT / "build" / "mutation", results: Pa
             src, dst = root / t.split("::")[0], scratch / t.split("::")[0]
             dst.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(src, dst)
-    killed = confirm(module, list(res.survived), run, scratch,
+    # the mutants no test of the measurement reached run too: a test written since for
+    # their functions is what reaches them (if the scratch copy names them all)
+    unreached = _unreached(scratch, module)
+    if len(unreached) != res.not_reached:
+        unreached = []
+    killed = confirm(module, [*res.survived, *unreached], run, scratch,
                      venv_bin or Path(sys.executable).parent, progress, children)
+    reached = sum(1 for n in killed if n in unreached)
     new = dataclasses.replace(
         res, tests_sha=_sha(tests, root), tests=tuple(tests), killed=res.killed + len(killed),
         survived=tuple(n for n in res.survived if n not in killed),
+        not_reached=res.not_reached - reached,
         killed_on_rerun=(*res.killed_on_rerun, *killed), refreshed=_now())
     _save(new, results)
     progress(f"{module}: {len(killed)} of {len(res.survived)} survivors killed by the current "
              f"selection; {new.killed}/{new.tried} killed ({_pct(new.killed, new.tried)})")
     return new
+
+
+def _unreached(scratch: Path, module: str) -> list[str]:
+    """The mutants of ``module`` that no selected test reached in the measurement that left
+    ``scratch`` (mutmut's exit code 33, "no tests", in its ``.meta`` file); [] without one."""
+    meta = scratch / "mutants" / f"{module}.meta"
+    if not meta.is_file():
+        return []
+    codes = json.loads(meta.read_text("utf-8")).get("exit_code_by_key", {})
+    return sorted(n for n, code in codes.items() if code == 33)
 
 
 def survivors(module: str, out: Path = ROOT / "build" / "mutation",

@@ -439,6 +439,27 @@ def test_refresh_runs_the_survivors_against_the_tests_written_since(tmp_path):
     assert (scratch / "mod.py").read_text() == (root / "mod.py").read_text()
 
 
+def test_refresh_runs_the_mutants_no_test_reached_and_counts_the_ones_killed_now(tmp_path):
+    """A mutant mutmut recorded as reached by no test (exit code 33 in the scratch copy's
+    .meta) runs against the tests written since: the new test kills a - b, which leaves the
+    not-reached count and joins the killed; b + a (equivalent) stays not reached, not a
+    survivor nobody listed. A .meta that does not name every unreached mutant runs none.
+    Planted: the .meta's exit code read as 1 (nothing run); the count not lowered."""
+    import json
+    root, scratch, names, bin_ = _refresh_tree(tmp_path)
+    (scratch / "mutants" / "mod.py.meta").write_text(json.dumps(
+        {"exit_code_by_key": {names[0]: 33, names[1]: 33, "mod.x_add__mutmut_3": 1}}))
+    results = tmp_path / "results"
+    kw = dict(out=tmp_path / "out", results=results, root=root, venv_bin=bin_, children=1,
+              progress=lambda *a: None)
+    mutation._save(_result("mod.py", root, survived=(), not_reached=2), results)
+    new = mutation.refresh("mod.py", **kw)
+    assert (new.killed, new.survived, new.not_reached, new.tried) == (6, (), 1, 7)
+    assert new.killed_on_rerun == (names[0],)
+    mutation._save(_result("mod.py", root, survived=(), not_reached=3), results)
+    assert mutation.refresh("mod.py", **kw).not_reached == 3
+
+
 def test_refresh_added_only_runs_the_files_added_since_and_not_the_old_ones(tmp_path):
     """With ``added_only`` the survivors run against the files the measurement did not have:
     the new test kills a - b as before, and the old file (which writes a marker when it runs)
