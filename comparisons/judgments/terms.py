@@ -121,7 +121,10 @@ def _terms(engine: Engine, quantity: str, s: States, k: int) -> list[np.ndarray]
 def compare_term(quantity: str, a: Engine, b: Engine, states: States,
                  tolerance: Tolerance) -> TermComparison:
     """Compare one quantity of engines a (the reference side) and b at every state, judged by
-    ``tolerance`` (the run's entry for ``quantity``)."""
+    ``tolerance`` (the run's entry for ``quantity``). ValueError for no states: nothing would
+    be compared, and a pass would be no finding."""
+    if len(states) == 0:
+        raise ValueError(f"no states to compare {quantity} at: give at least one")
     tol = tolerance
     A = np.asarray(_evaluate(a, quantity, states), dtype=float)
     B = np.asarray(_evaluate(b, quantity, states), dtype=float)
