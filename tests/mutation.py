@@ -521,8 +521,10 @@ def refresh(module: str, *, out: Path = ROOT / "build" / "mutation", results: Pa
         not_reached=res.not_reached - reached,
         killed_on_rerun=(*res.killed_on_rerun, *killed), refreshed=_now())
     _save(new, results)
-    progress(f"{module}: {len(killed)} of {len(res.survived)} survivors killed by the current "
-             f"selection; {new.killed}/{new.tried} killed ({_pct(new.killed, new.tried)})")
+    progress(f"{module}: {len(killed) - reached} of {len(res.survived)} survivors"
+             + (f" and {reached} of {len(unreached)} unreached mutants" if unreached else "")
+             + f" killed by the current selection; {new.killed}/{new.tried} killed "
+               f"({_pct(new.killed, new.tried)})")
     return new
 
 
